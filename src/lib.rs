@@ -1,0 +1,12 @@
+//! limitray: ray tracing of exact Catmull-Clark limit surfaces with RenderMan semi-sharp creases.
+//!
+//! The pipeline runs one way, one stage per module:
+//! [`mesh`] (control mesh, tags, validated topology) → [`refine`] (subdivision rules, stencil
+//! tables, limit masks) → patches → dicing → BVH → rendering.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod mesh;
+pub mod refine;
+
+pub use error::{Error, ErrorKind, Result};

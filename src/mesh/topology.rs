@@ -1,0 +1,5 @@
+//! Topology.
+
+/// Placeholder.
+#[derive(Debug)]
+pub struct Topology;

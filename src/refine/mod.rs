@@ -1,0 +1,1 @@
+//! Catmull-Clark refinement.
