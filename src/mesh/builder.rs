@@ -47,7 +47,11 @@ impl MeshBuilder {
 
     /// Adds a sharp edge between vertices `a` and `b` (0-based).
     pub fn crease(mut self, a: u32, b: u32, sharpness: f32) -> Self {
-        self.mesh.creases.push(EdgeCrease { v0: a, v1: b, sharpness });
+        self.mesh.creases.push(EdgeCrease {
+            v0: a,
+            v1: b,
+            sharpness,
+        });
         self
     }
 

@@ -172,7 +172,10 @@ impl ControlMesh {
             }
         }
         if self.face_offsets.is_empty() || self.face_offsets[0] != 0 {
-            return Err(Error::new(ErrorKind::Topology, "face offsets must start at 0"));
+            return Err(Error::new(
+                ErrorKind::Topology,
+                "face offsets must start at 0",
+            ));
         }
         if *self.face_offsets.last().unwrap() as usize != self.face_verts.len() {
             return Err(Error::new(
@@ -203,14 +206,21 @@ impl ControlMesh {
                     return Err(self.error_at(
                         ErrorKind::Topology,
                         Element::Face(f),
-                        format!("vertex index {} is out of range (mesh has {} vertices)", v + 1, nv),
+                        format!(
+                            "vertex index {} is out of range (mesh has {} vertices)",
+                            v + 1,
+                            nv
+                        ),
                     ));
                 }
                 if fv[..j].contains(&v) {
                     return Err(self.error_at(
                         ErrorKind::Topology,
                         Element::Face(f),
-                        format!("vertex {} appears twice in the face (degenerate face)", v + 1),
+                        format!(
+                            "vertex {} appears twice in the face (degenerate face)",
+                            v + 1
+                        ),
                     ));
                 }
             }
@@ -231,7 +241,10 @@ impl ControlMesh {
                 return Err(self.error_at(
                     ErrorKind::Topology,
                     Element::Crease(i),
-                    format!("crease vertex {} or {} is out of range (0-based, mesh has {nv} vertices)", c.v0, c.v1),
+                    format!(
+                        "crease vertex {} or {} is out of range (0-based, mesh has {nv} vertices)",
+                        c.v0, c.v1
+                    ),
                 ));
             }
             if c.v0 == c.v1 {
@@ -254,7 +267,10 @@ impl ControlMesh {
                 return Err(self.error_at(
                     ErrorKind::Topology,
                     Element::Corner(i),
-                    format!("corner vertex {} is out of range (0-based, mesh has {nv} vertices)", c.vertex),
+                    format!(
+                        "corner vertex {} is out of range (0-based, mesh has {nv} vertices)",
+                        c.vertex
+                    ),
                 ));
             }
             if !check_sharpness(c.sharpness) {
@@ -270,7 +286,10 @@ impl ControlMesh {
                 return Err(self.error_at(
                     ErrorKind::Topology,
                     Element::Hole(i),
-                    format!("hole face {h} is out of range (0-based, mesh has {} faces)", self.num_faces()),
+                    format!(
+                        "hole face {h} is out of range (0-based, mesh has {} faces)",
+                        self.num_faces()
+                    ),
                 ));
             }
         }

@@ -1,12 +1,66 @@
 //! Wavefront OBJ reading and writing with OpenSubdiv's tag syntax.
+//!
+//! # What is read
+//!
+//! * `v x y z [w]`: a position (`w` and any further components are ignored).
+//! * `vt u [v [w]]`: a texture coordinate, kept in [`ControlMesh::uvs`] (`v` defaults to 0).
+//! * `vn x y z`: accepted and ignored.
+//! * `f a b c …`: a face of any number of corners, each `v`, `v/vt`, `v//vn` or `v/vt/vn`.
+//!   Indices are 1-based; negative indices count back from the last `v` (or `vt`, `vn`) read
+//!   so far (`-1` is the latest). Texture indices are kept in [`ControlMesh::face_uvs`] only
+//!   when every face-vertex of the file has one.
+//! * `t NAME nint/nfloat[/nstring] ints… floats… strings…`: OpenSubdiv's tags, with 0-based
+//!   vertex and face indices: `crease` (the ints are pairs of vertices; one sharpness for all
+//!   pairs or one per pair), `corner`, `hole`, `interpolateboundary` (0 none, 1 edge and
+//!   corner, 2 edge only) and `creasemethod` (`chaikin`, `normal` or `uniform`). The
+//!   hierarchical edits `vertexedit`, `edgeedit` and `faceedit`, the face-varying tags and
+//!   `smoothtriangles` are recognised and ignored with a warning.
+//! * `ec s a b`: Embree's edge-crease extension: sharpness `s` on the edge between vertices `a`
+//!   and `b`, which are 1-based like `f` indices (negative ones relative to the vertices read
+//!   so far).
+//! * `o`, `g`, `s`, `usemtl` and `mtllib` are ignored; other statements are ignored with a
+//!   warning. `#` starts a comment anywhere on a line.
+//!
+//! Sharpness values at or above [`super::SHARPNESS_INFINITE`] are infinitely sharp; they are
+//! kept as written. Syntax errors are [`ErrorKind::Parse`] errors that name the file, line and
+//! statement; the parsed mesh is then checked with [`ControlMesh::validate`], whose errors name
+//! the line of the offending element.
 
-use super::ControlMesh;
+use super::{
+    BoundaryInterpolation, ControlMesh, CreaseMethod, EdgeCrease, Provenance, VertexCorner,
+};
 use crate::error::{Error, ErrorKind, Result};
+use std::collections::HashMap;
+use std::io::Write;
 use std::path::Path;
 
-/// Parses OBJ text. `file` names the source in error messages.
-pub fn parse_obj(_text: &str, _file: Option<&str>) -> Result<ControlMesh> {
-    Err(Error::new(ErrorKind::Usage, "OBJ parsing is not written yet"))
+/// How many warnings one kind of ignored statement may produce before further ones are only
+/// counted.
+const WARNINGS_PER_KIND: usize = 5;
+
+/// Longest token quoted in a message, in characters.
+const QUOTE_CHARS: usize = 40;
+
+/// Parses OBJ text. `file` names the source in error messages and warnings.
+///
+/// See the [module documentation](self) for the statements understood. The result has been
+/// checked with [`ControlMesh::validate`].
+pub fn parse_obj(text: &str, file: Option<&str>) -> Result<ControlMesh> {
+    let mut p = Parser::new(file);
+    for (i, raw) in text.lines().enumerate() {
+        let line = i.saturating_add(1);
+        let content = match raw.find('#') {
+            Some(k) => &raw[..k],
+            None => raw,
+        };
+        let tokens: Vec<&str> = content.split_whitespace().collect();
+        if let Some((&keyword, args)) = tokens.split_first() {
+            p.statement(line, keyword, args)?;
+        }
+    }
+    let mesh = p.finish()?;
+    mesh.validate()?;
+    Ok(mesh)
 }
 
 /// Reads and parses an OBJ file.
@@ -15,4 +69,682 @@ pub fn read_obj(path: &Path) -> Result<ControlMesh> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(name.clone()))?;
     parse_obj(&text, Some(&name))
+}
+
+/// Writes positions and faces as OBJ: one `v` line per position, with each coordinate written
+/// in the shortest form that reads back to the same `f64`, and one `f` line per face with
+/// 1-based indices. `face_offsets[f]..face_offsets[f + 1]` indexes `face_verts` for face `f`.
+///
+/// Offsets that decrease or run past `face_verts` give an [`std::io::ErrorKind::InvalidInput`]
+/// error.
+pub fn write_obj(
+    w: &mut impl Write,
+    positions: &[[f64; 3]],
+    face_offsets: &[u32],
+    face_verts: &[u32],
+) -> std::io::Result<()> {
+    for p in positions {
+        writeln!(w, "v {:?} {:?} {:?}", p[0], p[1], p[2])?;
+    }
+    for pair in face_offsets.windows(2) {
+        let (a, b) = (pair[0] as usize, pair[1] as usize);
+        let face = face_verts.get(a..b).ok_or_else(|| {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "face offsets {a}..{b} do not fit {} face-vertices",
+                    face_verts.len()
+                ),
+            )
+        })?;
+        w.write_all(b"f")?;
+        for &v in face {
+            write!(w, " {}", u64::from(v) + 1)?;
+        }
+        w.write_all(b"\n")?;
+    }
+    Ok(())
+}
+
+/// A token for a message: quoted, and shortened when long.
+fn quote(token: &str) -> String {
+    let mut chars = token.chars();
+    let head: String = chars.by_ref().take(QUOTE_CHARS).collect();
+    if chars.next().is_some() {
+        format!("'{head}…'")
+    } else {
+        format!("'{head}'")
+    }
+}
+
+/// What an OBJ index refers to, for resolving and for messages.
+#[derive(Clone, Copy)]
+enum IndexKind {
+    Vertex,
+    Texture,
+    Normal,
+}
+
+impl IndexKind {
+    fn noun(self) -> &'static str {
+        match self {
+            IndexKind::Vertex => "vertex",
+            IndexKind::Texture => "texture",
+            IndexKind::Normal => "normal",
+        }
+    }
+}
+
+/// Parser state: what has been read so far.
+struct Parser {
+    file: Option<String>,
+    mesh: ControlMesh,
+    /// Number of `vn` lines read.
+    normals: usize,
+    /// Face-vertices read with a texture index, and without.
+    with_uv: usize,
+    without_uv: usize,
+    /// Line of the first face-vertex with a texture index, and of the first without.
+    first_with_uv: Option<usize>,
+    first_without_uv: Option<usize>,
+    /// Whether a `v` line with more than four numbers has been warned about.
+    extra_components_warned: bool,
+    /// How many statements of each ignored kind were met so far.
+    ignored: HashMap<String, usize>,
+}
+
+impl Parser {
+    fn new(file: Option<&str>) -> Self {
+        let mut mesh = ControlMesh {
+            face_offsets: vec![0],
+            ..ControlMesh::default()
+        };
+        mesh.provenance = Provenance {
+            file: file.map(str::to_string),
+            ..Provenance::default()
+        };
+        Parser {
+            file: file.map(str::to_string),
+            mesh,
+            normals: 0,
+            with_uv: 0,
+            without_uv: 0,
+            first_with_uv: None,
+            first_without_uv: None,
+            extra_components_warned: false,
+            ignored: HashMap::new(),
+        }
+    }
+
+    /// A parse error at `line` in statement `element`.
+    fn err(&self, line: usize, element: &str, message: impl Into<String>) -> Error {
+        let mut e = Error::new(ErrorKind::Parse, message)
+            .at_line(line)
+            .element(element);
+        if let Some(f) = &self.file {
+            e = e.in_file(f.clone());
+        }
+        e
+    }
+
+    /// `file:line: ` (or `line N: `) for warnings.
+    fn loc(&self, line: usize) -> String {
+        match &self.file {
+            Some(f) => format!("{f}:{line}: "),
+            None => format!("line {line}: "),
+        }
+    }
+
+    fn warn(&mut self, line: usize, message: impl AsRef<str>) {
+        let w = format!("{}{}", self.loc(line), message.as_ref());
+        self.mesh.warnings.push(w);
+    }
+
+    /// Warns about an ignored statement, at most [`WARNINGS_PER_KIND`] times per kind.
+    fn warn_ignored(&mut self, line: usize, kind: &str, message: impl AsRef<str>) {
+        let n = self.ignored.entry(kind.to_string()).or_insert(0);
+        *n += 1;
+        if *n <= WARNINGS_PER_KIND {
+            self.warn(line, message);
+        }
+    }
+
+    /// 1-based line number as stored in the provenance.
+    fn line32(&self, line: usize, element: &str) -> Result<u32> {
+        u32::try_from(line).map_err(|_| self.err(line, element, "too many lines in the file"))
+    }
+
+    fn statement(&mut self, line: usize, keyword: &str, args: &[&str]) -> Result<()> {
+        match keyword {
+            "v" => self.vertex(line, args),
+            "vt" => self.texcoord(line, args),
+            "vn" => self.normal(line, args),
+            "f" => self.face(line, args),
+            "t" => self.tag(line, args),
+            "ec" => self.edge_crease(line, args),
+            "o" | "g" | "s" | "usemtl" | "mtllib" => Ok(()),
+            _ => {
+                let msg = format!("unknown statement {} ignored", quote(keyword));
+                self.warn_ignored(line, keyword, msg);
+                Ok(())
+            }
+        }
+    }
+
+    /// Parses a finite floating-point number.
+    fn number(&self, line: usize, element: &str, token: &str) -> Result<f64> {
+        let x: f64 = token
+            .parse()
+            .map_err(|_| self.err(line, element, format!("invalid number {}", quote(token))))?;
+        if !x.is_finite() {
+            return Err(self.err(
+                line,
+                element,
+                format!("number {} is not finite", quote(token)),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// Parses all of `args` as finite numbers; there must be at least `min` of them.
+    fn numbers(&self, line: usize, element: &str, args: &[&str], min: usize) -> Result<Vec<f64>> {
+        if args.len() < min {
+            return Err(self.err(
+                line,
+                element,
+                format!("expected {min} numbers, found {}", args.len()),
+            ));
+        }
+        args.iter().map(|t| self.number(line, element, t)).collect()
+    }
+
+    fn vertex(&mut self, line: usize, args: &[&str]) -> Result<()> {
+        let xs = self.numbers(line, "v", args, 3)?;
+        if xs.len() > 4 && !self.extra_components_warned {
+            self.extra_components_warned = true;
+            self.warn(
+                line,
+                format!(
+                    "v: {} numbers given; only the first 3 are used (further such lines not reported)",
+                    xs.len()
+                ),
+            );
+        }
+        let l = self.line32(line, "v")?;
+        self.mesh.positions.push([xs[0], xs[1], xs[2]]);
+        self.mesh.provenance.vertex_lines.push(l);
+        Ok(())
+    }
+
+    fn texcoord(&mut self, line: usize, args: &[&str]) -> Result<()> {
+        let xs = self.numbers(line, "vt", args, 1)?;
+        if xs.len() > 3 {
+            return Err(self.err(
+                line,
+                "vt",
+                format!("expected at most 3 numbers, found {}", xs.len()),
+            ));
+        }
+        self.mesh
+            .uvs
+            .push([xs[0], xs.get(1).copied().unwrap_or(0.0)]);
+        Ok(())
+    }
+
+    fn normal(&mut self, line: usize, args: &[&str]) -> Result<()> {
+        let xs = self.numbers(line, "vn", args, 3)?;
+        if xs.len() > 3 {
+            return Err(self.err(
+                line,
+                "vn",
+                format!("expected 3 numbers, found {}", xs.len()),
+            ));
+        }
+        self.normals += 1;
+        Ok(())
+    }
+
+    /// Resolves a 1-based (or negative, relative) OBJ index to a 0-based one. Positive indices
+    /// past the elements read so far are kept; [`ControlMesh::validate`] checks the range.
+    fn obj_index(&self, line: usize, element: &str, token: &str, kind: IndexKind) -> Result<u32> {
+        let count = match kind {
+            IndexKind::Vertex => self.mesh.positions.len(),
+            IndexKind::Texture => self.mesh.uvs.len(),
+            IndexKind::Normal => self.normals,
+        };
+        let noun = kind.noun();
+        let i: i64 = token.parse().map_err(|_| {
+            self.err(
+                line,
+                element,
+                format!("invalid {noun} index {}", quote(token)),
+            )
+        })?;
+        if i == 0 {
+            return Err(self.err(
+                line,
+                element,
+                format!("{noun} index 0 is invalid (OBJ indices start at 1)"),
+            ));
+        }
+        let resolved = if i > 0 {
+            i - 1
+        } else {
+            let c = i64::try_from(count).unwrap_or(i64::MAX);
+            let r = c.saturating_add(i);
+            if r < 0 {
+                let what = match kind {
+                    IndexKind::Vertex => "vertex",
+                    IndexKind::Texture => "texture coordinate",
+                    IndexKind::Normal => "normal",
+                };
+                return Err(self.err(
+                    line,
+                    element,
+                    format!(
+                        "relative index {i} refers before the first {what} ({count} read so far)"
+                    ),
+                ));
+            }
+            r
+        };
+        u32::try_from(resolved)
+            .map_err(|_| self.err(line, element, format!("{noun} index {i} is too large")))
+    }
+
+    fn face(&mut self, line: usize, args: &[&str]) -> Result<()> {
+        if args.is_empty() {
+            return Err(self.err(line, "f", "face has no vertices"));
+        }
+        let l = self.line32(line, "f")?;
+        let mut verts = Vec::with_capacity(args.len());
+        let mut uvs = Vec::with_capacity(args.len());
+        let mut missing_uv = 0usize;
+        for token in args {
+            let mut parts = token.split('/');
+            let v = parts.next().unwrap_or("");
+            let t = parts.next();
+            let n = parts.next();
+            if parts.next().is_some() {
+                return Err(self.err(
+                    line,
+                    "f",
+                    format!(
+                        "face-vertex {} has more than 3 parts (expected v, v/vt, v//vn or v/vt/vn)",
+                        quote(token)
+                    ),
+                ));
+            }
+            if v.is_empty() {
+                return Err(self.err(
+                    line,
+                    "f",
+                    format!("face-vertex {} has no vertex index", quote(token)),
+                ));
+            }
+            verts.push(self.obj_index(line, "f", v, IndexKind::Vertex)?);
+            match t {
+                Some("") if n.is_none() => {
+                    return Err(self.err(
+                        line,
+                        "f",
+                        format!("face-vertex {} has an empty texture index", quote(token)),
+                    ));
+                }
+                Some("") | None => missing_uv += 1,
+                Some(t) => uvs.push(self.obj_index(line, "f", t, IndexKind::Texture)?),
+            }
+            if let Some(n) = n {
+                if n.is_empty() {
+                    return Err(self.err(
+                        line,
+                        "f",
+                        format!("face-vertex {} has an empty normal index", quote(token)),
+                    ));
+                }
+                self.obj_index(line, "f", n, IndexKind::Normal)?;
+            }
+        }
+        let total = self.mesh.face_verts.len().saturating_add(verts.len());
+        let end =
+            u32::try_from(total).map_err(|_| self.err(line, "f", "too many face-vertices"))?;
+        if !uvs.is_empty() {
+            self.first_with_uv.get_or_insert(line);
+        }
+        if missing_uv > 0 {
+            self.first_without_uv.get_or_insert(line);
+        }
+        self.with_uv += uvs.len();
+        self.without_uv += missing_uv;
+        self.mesh.face_verts.extend_from_slice(&verts);
+        self.mesh.face_uvs.extend_from_slice(&uvs);
+        self.mesh.face_offsets.push(end);
+        self.mesh.provenance.face_lines.push(l);
+        Ok(())
+    }
+
+    /// Parses a sharpness: a number that is not negative and not NaN (infinity is allowed).
+    fn sharpness(&self, line: usize, element: &str, token: &str) -> Result<f32> {
+        let s: f32 = token
+            .parse()
+            .map_err(|_| self.err(line, element, format!("invalid number {}", quote(token))))?;
+        if s.is_nan() || s < 0.0 {
+            return Err(self.err(
+                line,
+                element,
+                format!("sharpness {} is invalid (must be ≥ 0)", quote(token)),
+            ));
+        }
+        Ok(s)
+    }
+
+    /// Parses a 0-based index of a tag.
+    fn tag_index(&self, line: usize, element: &str, token: &str, noun: &str) -> Result<u32> {
+        let i: i64 = token.parse().map_err(|_| {
+            self.err(
+                line,
+                element,
+                format!("invalid {noun} index {}", quote(token)),
+            )
+        })?;
+        if i < 0 {
+            return Err(self.err(
+                line,
+                element,
+                format!("{noun} index {i} is negative (tag indices are 0-based)"),
+            ));
+        }
+        u32::try_from(i)
+            .map_err(|_| self.err(line, element, format!("{noun} index {i} is too large")))
+    }
+
+    fn tag(&mut self, line: usize, args: &[&str]) -> Result<()> {
+        let Some((&name, rest)) = args.split_first() else {
+            return Err(self.err(line, "t", "missing tag name"));
+        };
+        let element = format!("tag {name}");
+        let el = element.as_str();
+        let Some((&counts, values)) = rest.split_first() else {
+            return Err(self.err(line, el, "missing count field nint/nfloat[/nstring]"));
+        };
+        let fields: Vec<&str> = counts.split('/').collect();
+        if !(2..=3).contains(&fields.len()) {
+            return Err(self.err(
+                line,
+                el,
+                format!(
+                    "count field {} is not of the form nint/nfloat[/nstring]",
+                    quote(counts)
+                ),
+            ));
+        }
+        let mut n = [0usize; 3];
+        for (k, f) in fields.iter().enumerate() {
+            n[k] = f.parse().map_err(|_| {
+                self.err(
+                    line,
+                    el,
+                    format!(
+                        "invalid count {} in count field {}",
+                        quote(f),
+                        quote(counts)
+                    ),
+                )
+            })?;
+        }
+        let [nint, nfloat, nstring] = n;
+        let expected = nint
+            .checked_add(nfloat)
+            .and_then(|s| s.checked_add(nstring));
+        if expected != Some(values.len()) {
+            return Err(self.err(
+                line,
+                el,
+                format!(
+                    "count field {} announces {nint} ints, {nfloat} floats and {nstring} strings, \
+                     but {} values follow",
+                    quote(counts),
+                    values.len()
+                ),
+            ));
+        }
+        let (ints, rest) = values.split_at(nint);
+        let (floats, strings) = rest.split_at(nfloat);
+        match name {
+            "crease" => self.tag_crease(line, el, ints, floats, strings),
+            "corner" => self.tag_corner(line, el, ints, floats, strings),
+            "hole" => self.tag_hole(line, el, ints, floats, strings),
+            "interpolateboundary" => {
+                self.unused(line, el, &[floats, strings]);
+                let [v] = ints else {
+                    return Err(self.err(
+                        line,
+                        el,
+                        format!("expected 1 int, found {}", ints.len()),
+                    ));
+                };
+                self.mesh.options.boundary = match v.parse::<i64>() {
+                    Ok(0) => BoundaryInterpolation::None,
+                    Ok(1) => BoundaryInterpolation::EdgeAndCorner,
+                    Ok(2) => BoundaryInterpolation::EdgeOnly,
+                    _ => {
+                        return Err(self.err(
+                            line,
+                            el,
+                            format!(
+                            "invalid value {} (expected 0 none, 1 edge and corner, 2 edge only)",
+                            quote(v)
+                        ),
+                        ))
+                    }
+                };
+                Ok(())
+            }
+            "creasemethod" => {
+                self.unused(line, el, &[ints, floats]);
+                let [s] = strings else {
+                    return Err(self.err(
+                        line,
+                        el,
+                        format!("expected 1 string, found {}", strings.len()),
+                    ));
+                };
+                self.mesh.options.crease_method = match unquote(s) {
+                    "chaikin" => CreaseMethod::Chaikin,
+                    "normal" | "uniform" => CreaseMethod::Uniform,
+                    other => {
+                        return Err(self.err(
+                            line,
+                            el,
+                            format!(
+                                "unknown crease method {} (expected chaikin, normal or uniform)",
+                                quote(other)
+                            ),
+                        ))
+                    }
+                };
+                Ok(())
+            }
+            "vertexedit" | "edgeedit" | "faceedit" => {
+                let msg = format!("{el}: hierarchical edits are not yet supported and are ignored");
+                self.warn_ignored(line, el, msg);
+                Ok(())
+            }
+            "facevaryinginterpolateboundary"
+            | "facevaryingpropagatecorners"
+            | "smoothtriangles" => {
+                let msg = format!("{el}: not supported, ignored");
+                self.warn_ignored(line, el, msg);
+                Ok(())
+            }
+            _ => {
+                let msg = format!("unknown tag {} ignored", quote(name));
+                self.warn_ignored(line, el, msg);
+                Ok(())
+            }
+        }
+    }
+
+    /// Warns when a tag carries values it does not use.
+    fn unused(&mut self, line: usize, el: &str, unused: &[&[&str]]) {
+        if unused.iter().any(|v| !v.is_empty()) {
+            self.warn(line, format!("{el}: unused values ignored"));
+        }
+    }
+
+    /// Sharpness values of a tag: one for all `n` entries, or one per entry.
+    fn tag_sharpness(
+        &self,
+        line: usize,
+        el: &str,
+        floats: &[&str],
+        n: usize,
+        per: &str,
+    ) -> Result<Vec<f32>> {
+        if floats.len() != 1 && floats.len() != n {
+            return Err(self.err(
+                line,
+                el,
+                format!(
+                    "expected 1 sharpness for all or one per {per} ({n}), found {}",
+                    floats.len()
+                ),
+            ));
+        }
+        floats.iter().map(|t| self.sharpness(line, el, t)).collect()
+    }
+
+    fn tag_crease(
+        &mut self,
+        line: usize,
+        el: &str,
+        ints: &[&str],
+        floats: &[&str],
+        strings: &[&str],
+    ) -> Result<()> {
+        self.unused(line, el, &[strings]);
+        if ints.is_empty() || ints.len() % 2 != 0 {
+            return Err(self.err(
+                line,
+                el,
+                format!(
+                    "expected pairs of vertex indices, found {} ints",
+                    ints.len()
+                ),
+            ));
+        }
+        let pairs = ints.len() / 2;
+        let sharp = self.tag_sharpness(line, el, floats, pairs, "pair")?;
+        let l = self.line32(line, el)?;
+        for (k, pair) in ints.chunks_exact(2).enumerate() {
+            let v0 = self.tag_index(line, el, pair[0], "vertex")?;
+            let v1 = self.tag_index(line, el, pair[1], "vertex")?;
+            let sharpness = if sharp.len() == 1 { sharp[0] } else { sharp[k] };
+            self.mesh.creases.push(EdgeCrease { v0, v1, sharpness });
+            self.mesh.provenance.crease_lines.push(l);
+        }
+        Ok(())
+    }
+
+    fn tag_corner(
+        &mut self,
+        line: usize,
+        el: &str,
+        ints: &[&str],
+        floats: &[&str],
+        strings: &[&str],
+    ) -> Result<()> {
+        self.unused(line, el, &[strings]);
+        if ints.is_empty() {
+            return Err(self.err(line, el, "expected at least 1 vertex index, found 0"));
+        }
+        let sharp = self.tag_sharpness(line, el, floats, ints.len(), "vertex")?;
+        let l = self.line32(line, el)?;
+        for (k, t) in ints.iter().enumerate() {
+            let vertex = self.tag_index(line, el, t, "vertex")?;
+            let sharpness = if sharp.len() == 1 { sharp[0] } else { sharp[k] };
+            self.mesh.corners.push(VertexCorner { vertex, sharpness });
+            self.mesh.provenance.corner_lines.push(l);
+        }
+        Ok(())
+    }
+
+    fn tag_hole(
+        &mut self,
+        line: usize,
+        el: &str,
+        ints: &[&str],
+        floats: &[&str],
+        strings: &[&str],
+    ) -> Result<()> {
+        self.unused(line, el, &[floats, strings]);
+        let l = self.line32(line, el)?;
+        for t in ints {
+            let face = self.tag_index(line, el, t, "face")?;
+            self.mesh.holes.push(face);
+            self.mesh.provenance.hole_lines.push(l);
+        }
+        Ok(())
+    }
+
+    /// Embree's `ec s a b`: sharpness, then two 1-based (or negative, relative) vertex indices.
+    fn edge_crease(&mut self, line: usize, args: &[&str]) -> Result<()> {
+        let [s, a, b] = args else {
+            return Err(self.err(
+                line,
+                "ec",
+                format!(
+                    "expected sharpness and 2 vertex indices (3 values), found {}",
+                    args.len()
+                ),
+            ));
+        };
+        let sharpness = self.sharpness(line, "ec", s)?;
+        let v0 = self.obj_index(line, "ec", a, IndexKind::Vertex)?;
+        let v1 = self.obj_index(line, "ec", b, IndexKind::Vertex)?;
+        let l = self.line32(line, "ec")?;
+        self.mesh.creases.push(EdgeCrease { v0, v1, sharpness });
+        self.mesh.provenance.crease_lines.push(l);
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<ControlMesh> {
+        if self.with_uv > 0 && self.without_uv > 0 {
+            let line = self.first_without_uv.unwrap_or(0);
+            let with = self.first_with_uv.unwrap_or(0);
+            self.warn(
+                line,
+                format!(
+                    "f: this face has no texture indices but others do (first at line {with}); \
+                     texture indices are ignored",
+                ),
+            );
+            self.mesh.face_uvs.clear();
+        }
+        let mut kinds: Vec<(String, usize)> = self
+            .ignored
+            .iter()
+            .filter(|(_, &n)| n > WARNINGS_PER_KIND)
+            .map(|(k, &n)| (k.clone(), n))
+            .collect();
+        kinds.sort();
+        for (kind, n) in kinds {
+            let msg = match &self.file {
+                Some(f) => format!(
+                    "{f}: {} more '{kind}' statements ignored",
+                    n - WARNINGS_PER_KIND
+                ),
+                None => format!("{} more '{kind}' statements ignored", n - WARNINGS_PER_KIND),
+            };
+            self.mesh.warnings.push(msg);
+        }
+        Ok(self.mesh)
+    }
+}
+
+/// Strips one pair of surrounding double quotes from a tag string.
+fn unquote(s: &str) -> &str {
+    s.strip_prefix('"')
+        .and_then(|t| t.strip_suffix('"'))
+        .unwrap_or(s)
 }

@@ -1,5 +1,423 @@
-//! Topology.
+//! Edge and vertex adjacency of a polygon mesh, with ordered vertex rings.
+//!
+//! Conventions (shared by every refinement level):
+//! - edge `i` of a face runs from its vertex `i` to vertex `i + 1`;
+//! - around a manifold vertex, incident faces are ordered counter-clockwise (for
+//!   counter-clockwise faces); `vert_edges[i]` is the *leading* edge of `vert_faces[i]`
+//!   (the face's edge leaving the vertex) and the *trailing* edge of face `i` is edge `i + 1`;
+//! - a boundary vertex starts at the face whose leading edge is a boundary edge and has one
+//!   more edge than faces; an interior vertex has as many edges as faces.
 
-/// Placeholder.
-#[derive(Debug)]
-pub struct Topology;
+use crate::error::{Error, ErrorKind, Result};
+
+/// Per-vertex topological tags.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VertexTag {
+    /// On an open boundary (an incident edge has one face).
+    pub boundary: bool,
+    /// The faces around the vertex do not form one consistently oriented fan: a bow-tie, an
+    /// incident non-manifold edge, or inconsistent winding. Its ring is not ordered.
+    pub nonmanifold: bool,
+}
+
+/// Adjacency of a polygon mesh (no positions).
+#[derive(Clone, Debug, Default)]
+pub struct Topology {
+    /// Number of vertices (vertices used by no face are allowed).
+    pub num_vertices: usize,
+    /// Face ranges into `face_verts` / `face_edges`.
+    pub face_offsets: Vec<u32>,
+    /// Vertex indices of each face.
+    pub face_verts: Vec<u32>,
+    /// Edge `i` of each face (from vertex `i` to `i + 1`), parallel to `face_verts`.
+    pub face_edges: Vec<u32>,
+    /// The two vertices of each edge.
+    pub edge_verts: Vec<[u32; 2]>,
+    /// Ranges into `edge_faces`.
+    pub edge_face_offsets: Vec<u32>,
+    /// Faces incident to each edge.
+    pub edge_faces: Vec<u32>,
+    /// Edge has more than two faces or two faces that traverse it the same way.
+    pub edge_nonmanifold: Vec<bool>,
+    /// Ranges into `vert_faces` / `vert_face_corner`.
+    pub vert_face_offsets: Vec<u32>,
+    /// Faces around each vertex (ordered for manifold vertices).
+    pub vert_faces: Vec<u32>,
+    /// Position of the vertex within each face of `vert_faces`.
+    pub vert_face_corner: Vec<u32>,
+    /// Ranges into `vert_edges`.
+    pub vert_edge_offsets: Vec<u32>,
+    /// Edges around each vertex (ordered for manifold vertices, see module docs).
+    pub vert_edges: Vec<u32>,
+    /// Tags per vertex.
+    pub vert_tags: Vec<VertexTag>,
+}
+
+fn ranges(counts: &[u32]) -> Vec<u32> {
+    let mut off = Vec::with_capacity(counts.len() + 1);
+    let mut acc = 0u32;
+    off.push(0);
+    for &c in counts {
+        acc += c;
+        off.push(acc);
+    }
+    off
+}
+
+impl Topology {
+    /// Builds the adjacency of `num_vertices` vertices and the faces given as ranges of
+    /// `face_verts`. Face sizes ≥ 3 and indices in range are the caller's to check
+    /// ([`crate::mesh::ControlMesh::validate`]); they are checked again here and reported.
+    pub fn new(num_vertices: usize, face_offsets: &[u32], face_verts: &[u32]) -> Result<Self> {
+        let nf = face_offsets.len().saturating_sub(1);
+        for f in 0..nf {
+            let (a, b) = (face_offsets[f] as usize, face_offsets[f + 1] as usize);
+            if b < a + 3 || b > face_verts.len() {
+                return Err(
+                    Error::new(ErrorKind::Topology, "face has fewer than 3 vertices")
+                        .element(format!("face {}", f + 1)),
+                );
+            }
+            if let Some(&v) = face_verts[a..b]
+                .iter()
+                .find(|&&v| v as usize >= num_vertices)
+            {
+                return Err(Error::new(
+                    ErrorKind::Topology,
+                    format!("vertex index {} out of range", v + 1),
+                )
+                .element(format!("face {}", f + 1)));
+            }
+        }
+        let nfv = face_verts.len();
+        // Edges: sort face-edges by their unordered vertex pair.
+        let mut keys: Vec<(u64, u32)> = Vec::with_capacity(nfv);
+        let mut fe_face = vec![0u32; nfv];
+        for f in 0..nf {
+            let (a, b) = (face_offsets[f] as usize, face_offsets[f + 1] as usize);
+            let n = b - a;
+            for i in 0..n {
+                let v0 = face_verts[a + i];
+                let v1 = face_verts[a + (i + 1) % n];
+                let (lo, hi) = if v0 < v1 { (v0, v1) } else { (v1, v0) };
+                keys.push((((lo as u64) << 32) | hi as u64, (a + i) as u32));
+                fe_face[a + i] = f as u32;
+            }
+        }
+        keys.sort_unstable();
+        let mut face_edges = vec![0u32; nfv];
+        let mut edge_verts: Vec<[u32; 2]> = Vec::new();
+        let mut edge_face_counts: Vec<u32> = Vec::new();
+        let mut edge_nonmanifold: Vec<bool> = Vec::new();
+        let mut i = 0;
+        while i < keys.len() {
+            let key = keys[i].0;
+            let mut j = i;
+            while j < keys.len() && keys[j].0 == key {
+                j += 1;
+            }
+            let e = edge_verts.len() as u32;
+            let lo = (key >> 32) as u32;
+            let hi = key as u32;
+            // Orientation of each use: does the face run lo -> hi?
+            let mut forward = 0;
+            for &(_, fe) in &keys[i..j] {
+                face_edges[fe as usize] = e;
+                if face_verts[fe as usize] == lo {
+                    forward += 1;
+                }
+            }
+            let uses = j - i;
+            let nonman = uses > 2 || (uses == 2 && forward != 1);
+            // Keep the first use's direction for edge_verts.
+            let first = keys[i].1 as usize;
+            let v0 = face_verts[first];
+            edge_verts.push(if v0 == lo { [lo, hi] } else { [hi, lo] });
+            edge_face_counts.push(uses as u32);
+            edge_nonmanifold.push(nonman);
+            i = j;
+        }
+        let ne = edge_verts.len();
+        let edge_face_offsets = ranges(&edge_face_counts);
+        let mut edge_faces = vec![0u32; nfv];
+        {
+            let mut fill = edge_face_offsets.clone();
+            for (fe, &e) in face_edges.iter().enumerate() {
+                let slot = &mut fill[e as usize];
+                edge_faces[*slot as usize] = fe_face[fe];
+                *slot += 1;
+            }
+        }
+        // Vertex -> face corners, unordered first.
+        let mut vcount = vec![0u32; num_vertices];
+        for &v in face_verts {
+            vcount[v as usize] += 1;
+        }
+        let vert_face_offsets = ranges(&vcount);
+        let mut vf_unordered = vec![(0u32, 0u32); nfv];
+        {
+            let mut fill = vert_face_offsets.clone();
+            for f in 0..nf {
+                let a = face_offsets[f] as usize;
+                let b = face_offsets[f + 1] as usize;
+                for (k, &v) in face_verts[a..b].iter().enumerate() {
+                    let slot = &mut fill[v as usize];
+                    vf_unordered[*slot as usize] = (f as u32, k as u32);
+                    *slot += 1;
+                }
+            }
+        }
+        let mut topo = Topology {
+            num_vertices,
+            face_offsets: face_offsets.to_vec(),
+            face_verts: face_verts.to_vec(),
+            face_edges,
+            edge_verts,
+            edge_face_offsets,
+            edge_faces,
+            edge_nonmanifold,
+            vert_face_offsets,
+            vert_faces: vec![0; nfv],
+            vert_face_corner: vec![0; nfv],
+            vert_edge_offsets: Vec::new(),
+            vert_edges: Vec::new(),
+            vert_tags: vec![VertexTag::default(); num_vertices],
+        };
+        // Order each vertex's ring.
+        let mut edge_counts = vec![0u32; num_vertices];
+        let mut rings: Vec<Vec<u32>> = Vec::with_capacity(num_vertices);
+        let mut fan = Vec::new();
+        for v in 0..num_vertices {
+            let (a, b) = (
+                topo.vert_face_offsets[v] as usize,
+                topo.vert_face_offsets[v + 1] as usize,
+            );
+            let corners = &vf_unordered[a..b];
+            let (edges, tag) = topo.order_ring(corners, &mut fan);
+            topo.vert_tags[v] = tag;
+            for (k, &(f, c)) in fan.iter().enumerate() {
+                topo.vert_faces[a + k] = f;
+                topo.vert_face_corner[a + k] = c;
+            }
+            edge_counts[v] = edges.len() as u32;
+            rings.push(edges);
+        }
+        topo.vert_edge_offsets = ranges(&edge_counts);
+        topo.vert_edges = rings.into_iter().flatten().collect();
+        debug_assert_eq!(topo.edge_verts.len(), ne);
+        Ok(topo)
+    }
+
+    /// Orders the face corners around one vertex; returns its edges and tags and leaves the
+    /// ordered corners in `fan`.
+    fn order_ring(
+        &self,
+        corners: &[(u32, u32)],
+        fan: &mut Vec<(u32, u32)>,
+    ) -> (Vec<u32>, VertexTag) {
+        fan.clear();
+        let mut tag = VertexTag::default();
+        if corners.is_empty() {
+            return (Vec::new(), tag);
+        }
+        let lead = |&(f, c): &(u32, u32)| self.face_edge(f as usize, c as usize);
+        let trail = |&(f, c): &(u32, u32)| {
+            let n = self.face_size(f as usize);
+            self.face_edge(f as usize, (c as usize + n - 1) % n)
+        };
+        let mut nonman = false;
+        for c in corners {
+            for e in [lead(c), trail(c)] {
+                let nfe = self.edge_face_count(e);
+                if self.edge_nonmanifold[e as usize] {
+                    nonman = true;
+                }
+                if nfe == 1 {
+                    tag.boundary = true;
+                }
+            }
+        }
+        if !nonman {
+            // Start at a corner whose leading edge is a boundary edge, if any.
+            let start = corners
+                .iter()
+                .position(|c| self.edge_face_count(lead(c)) == 1)
+                .unwrap_or(0);
+            let mut cur = corners[start];
+            let mut edges = vec![lead(&cur)];
+            loop {
+                fan.push(cur);
+                let t = trail(&cur);
+                edges.push(t);
+                if self.edge_face_count(t) == 1 {
+                    break; // reached the other boundary
+                }
+                // The other face of the trailing edge.
+                let fs = self.edge_face_list(t);
+                let other = if fs[0] == cur.0 { fs[1] } else { fs[0] };
+                let Some(next) = corners.iter().find(|c| c.0 == other) else {
+                    nonman = true;
+                    break;
+                };
+                if *next == corners[start] {
+                    edges.pop(); // closed fan: the trailing edge is the first leading edge
+                    break;
+                }
+                if fan.len() > corners.len() {
+                    nonman = true;
+                    break;
+                }
+                cur = *next;
+            }
+            if !nonman && fan.len() == corners.len() {
+                return (edges, tag);
+            }
+        }
+        // Non-manifold: keep faces in input order, edges unique.
+        tag.nonmanifold = true;
+        fan.clear();
+        fan.extend_from_slice(corners);
+        let mut edges = Vec::new();
+        for c in corners {
+            for e in [lead(c), trail(c)] {
+                if !edges.contains(&e) {
+                    edges.push(e);
+                }
+            }
+        }
+        (edges, tag)
+    }
+
+    /// Number of faces.
+    pub fn num_faces(&self) -> usize {
+        self.face_offsets.len() - 1
+    }
+    /// Number of edges.
+    pub fn num_edges(&self) -> usize {
+        self.edge_verts.len()
+    }
+    /// Number of vertices of face `f`.
+    pub fn face_size(&self, f: usize) -> usize {
+        (self.face_offsets[f + 1] - self.face_offsets[f]) as usize
+    }
+    /// Vertices of face `f`.
+    pub fn face_vertices(&self, f: usize) -> &[u32] {
+        &self.face_verts[self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize]
+    }
+    /// Edges of face `f` (edge `i` from vertex `i` to `i + 1`).
+    pub fn face_edge_list(&self, f: usize) -> &[u32] {
+        &self.face_edges[self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize]
+    }
+    /// Edge `i` of face `f`.
+    pub fn face_edge(&self, f: usize, i: usize) -> u32 {
+        self.face_edges[self.face_offsets[f] as usize + i]
+    }
+    /// Faces incident to edge `e`.
+    pub fn edge_face_list(&self, e: u32) -> &[u32] {
+        let e = e as usize;
+        &self.edge_faces[self.edge_face_offsets[e] as usize..self.edge_face_offsets[e + 1] as usize]
+    }
+    /// Number of faces incident to edge `e`.
+    pub fn edge_face_count(&self, e: u32) -> usize {
+        let e = e as usize;
+        (self.edge_face_offsets[e + 1] - self.edge_face_offsets[e]) as usize
+    }
+    /// Faces around vertex `v`.
+    pub fn vertex_faces(&self, v: usize) -> &[u32] {
+        &self.vert_faces[self.vert_face_offsets[v] as usize..self.vert_face_offsets[v + 1] as usize]
+    }
+    /// Corner index of `v` in each of [`Self::vertex_faces`].
+    pub fn vertex_face_corners(&self, v: usize) -> &[u32] {
+        &self.vert_face_corner
+            [self.vert_face_offsets[v] as usize..self.vert_face_offsets[v + 1] as usize]
+    }
+    /// Edges around vertex `v`.
+    pub fn vertex_edges(&self, v: usize) -> &[u32] {
+        &self.vert_edges[self.vert_edge_offsets[v] as usize..self.vert_edge_offsets[v + 1] as usize]
+    }
+    /// The end of edge `e` that is not `v`.
+    pub fn other_vertex(&self, e: u32, v: u32) -> u32 {
+        let [a, b] = self.edge_verts[e as usize];
+        if a == v {
+            b
+        } else {
+            a
+        }
+    }
+    /// The edge joining `a` and `b`, if any.
+    pub fn find_edge(&self, a: u32, b: u32) -> Option<u32> {
+        if a as usize >= self.num_vertices {
+            return None;
+        }
+        self.vertex_edges(a as usize)
+            .iter()
+            .copied()
+            .find(|&e| self.other_vertex(e, a) == b)
+    }
+    /// True if the edge has exactly one face.
+    pub fn edge_is_boundary(&self, e: u32) -> bool {
+        self.edge_face_count(e) == 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: u32) -> (Vec<u32>, Vec<u32>) {
+        let mut off = vec![0];
+        let mut fv = vec![];
+        for i in 0..n {
+            for j in 0..n {
+                let a = i * (n + 1) + j;
+                fv.extend_from_slice(&[a, a + n + 1, a + n + 2, a + 1]);
+                off.push(fv.len() as u32);
+            }
+        }
+        (off, fv)
+    }
+
+    #[test]
+    fn grid_rings_are_ordered() {
+        let (off, fv) = grid(2);
+        let t = Topology::new(9, &off, &fv).unwrap();
+        assert_eq!(t.num_edges(), 12);
+        // centre vertex 4: interior, 4 faces, 4 edges, ring ordered so that trailing edge of
+        // face i is the leading edge of face i+1.
+        assert!(!t.vert_tags[4].boundary);
+        let faces = t.vertex_faces(4);
+        let edges = t.vertex_edges(4);
+        assert_eq!(faces.len(), 4);
+        assert_eq!(edges.len(), 4);
+        for i in 0..4 {
+            let f = faces[i] as usize;
+            let c = t.vertex_face_corners(4)[i] as usize;
+            assert_eq!(t.face_edge(f, c), edges[i]);
+            assert_eq!(t.face_edge(f, (c + 3) % 4), edges[(i + 1) % 4]);
+        }
+        // corner vertex 0: one face, two edges, boundary
+        assert!(t.vert_tags[0].boundary);
+        assert_eq!(t.vertex_edges(0).len(), 2);
+        // boundary edge vertex 1: 2 faces, 3 edges, first leading edge is boundary
+        let e1 = t.vertex_edges(1);
+        assert_eq!(e1.len(), 3);
+        assert!(t.edge_is_boundary(e1[0]) && t.edge_is_boundary(e1[2]));
+        assert!(!t.edge_is_boundary(e1[1]));
+    }
+
+    #[test]
+    fn bowtie_and_nonmanifold_edges_are_tagged() {
+        // two triangles sharing only vertex 0
+        let t = Topology::new(5, &[0, 3, 6], &[0, 1, 2, 0, 3, 4]).unwrap();
+        assert!(t.vert_tags[0].nonmanifold);
+        assert!(!t.vert_tags[1].nonmanifold);
+        // three quads on one edge
+        let t = Topology::new(8, &[0, 4, 8, 12], &[0, 1, 2, 3, 1, 0, 4, 5, 0, 1, 6, 7]).unwrap();
+        let e = t.find_edge(0, 1).unwrap();
+        assert!(t.edge_nonmanifold[e as usize]);
+        assert!(t.vert_tags[0].nonmanifold);
+        // inconsistent winding
+        let t = Topology::new(6, &[0, 4, 8], &[0, 1, 2, 3, 0, 1, 4, 5]).unwrap();
+        assert!(t.edge_nonmanifold[t.find_edge(0, 1).unwrap() as usize]);
+    }
+}

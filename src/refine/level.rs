@@ -1,0 +1,159 @@
+//! One level of a subdivided mesh: topology plus the sharpness of every edge and vertex and
+//! the hole flag of every face. Level 0 comes from the control mesh and its tags.
+
+use super::crease::{self, Rule};
+use crate::error::{ErrorKind, Result};
+use crate::mesh::{
+    BoundaryInterpolation, ControlMesh, Element, Options, Topology, SHARPNESS_INFINITE,
+};
+
+/// Topology and tags of one refinement level.
+#[derive(Clone, Debug)]
+pub struct Level {
+    /// Adjacency.
+    pub topo: Topology,
+    /// Sharpness per edge (boundary and non-manifold edges are infinitely sharp).
+    pub edge_sharpness: Vec<f32>,
+    /// Sharpness per vertex (corners of one face are infinitely sharp with edge-and-corner
+    /// boundaries; non-manifold vertices are infinitely sharp unless on a non-manifold crease).
+    pub vertex_sharpness: Vec<f32>,
+    /// Faces that are not part of the surface (hole tags; boundary faces when boundary
+    /// interpolation is `None`).
+    pub face_hole: Vec<bool>,
+}
+
+impl Level {
+    /// Level 0 of `mesh` under `options`. Crease tags on edges that do not exist are ignored
+    /// with a warning, as OpenSubdiv does; the warnings are returned.
+    pub fn base(mesh: &ControlMesh, options: &Options) -> Result<(Level, Vec<String>)> {
+        mesh.validate()?;
+        let topo = Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
+            .map_err(|e| {
+                let mut e = e;
+                if let Some(f) = &mesh.provenance.file {
+                    e = e.in_file(f.clone());
+                }
+                e
+            })?;
+        let mut warnings = Vec::new();
+        let ne = topo.num_edges();
+        let nv = topo.num_vertices;
+        let mut edge_sharpness = vec![0.0f32; ne];
+        for (i, c) in mesh.creases.iter().enumerate() {
+            match topo.find_edge(c.v0, c.v1) {
+                Some(e) => edge_sharpness[e as usize] = crease::canonical(c.sharpness),
+                None => warnings.push(
+                    mesh.error_at(
+                        ErrorKind::Topology,
+                        Element::Crease(i),
+                        format!(
+                            "no edge joins vertices {} and {}; crease ignored",
+                            c.v0, c.v1
+                        ),
+                    )
+                    .to_string(),
+                ),
+            }
+        }
+        for e in 0..ne {
+            if topo.edge_face_count(e as u32) != 2 || topo.edge_nonmanifold[e] {
+                edge_sharpness[e] = SHARPNESS_INFINITE;
+            }
+        }
+        let mut vertex_sharpness = vec![0.0f32; nv];
+        for c in &mesh.corners {
+            vertex_sharpness[c.vertex as usize] = crease::canonical(c.sharpness);
+        }
+        for v in 0..nv {
+            let tag = topo.vert_tags[v];
+            let faces = topo.vertex_faces(v).len();
+            let edges = topo.vertex_edges(v);
+            if tag.nonmanifold {
+                let nonman_edges = edges
+                    .iter()
+                    .filter(|&&e| topo.edge_nonmanifold[e as usize])
+                    .count();
+                // A vertex in the middle of a chain of non-manifold edges is a crease.
+                let on_nonmanifold_crease = nonman_edges == 2
+                    && edges.iter().all(|&e| {
+                        topo.edge_nonmanifold[e as usize] || topo.edge_face_count(e) == 2
+                    });
+                if !on_nonmanifold_crease {
+                    vertex_sharpness[v] = SHARPNESS_INFINITE;
+                }
+            } else if faces == 1
+                && edges.len() == 2
+                && options.boundary == BoundaryInterpolation::EdgeAndCorner
+            {
+                vertex_sharpness[v] = SHARPNESS_INFINITE;
+            }
+        }
+        let mut face_hole = vec![false; topo.num_faces()];
+        for &h in &mesh.holes {
+            face_hole[h as usize] = true;
+        }
+        if options.boundary == BoundaryInterpolation::None {
+            for (f, hole) in face_hole.iter_mut().enumerate() {
+                if topo
+                    .face_vertices(f)
+                    .iter()
+                    .any(|&v| topo.vert_tags[v as usize].boundary)
+                {
+                    *hole = true;
+                }
+            }
+        }
+        Ok((
+            Level {
+                topo,
+                edge_sharpness,
+                vertex_sharpness,
+                face_hole,
+            },
+            warnings,
+        ))
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.topo.num_vertices
+    }
+
+    /// Number of faces.
+    pub fn num_faces(&self) -> usize {
+        self.topo.num_faces()
+    }
+
+    /// Sharpness of the edges around `v`, in ring order, into `out`.
+    pub fn incident_sharpness(&self, v: usize, out: &mut Vec<f32>) {
+        out.clear();
+        out.extend(
+            self.topo
+                .vertex_edges(v)
+                .iter()
+                .map(|&e| self.edge_sharpness[e as usize]),
+        );
+    }
+
+    /// The rule of vertex `v` at this level.
+    pub fn vertex_rule(&self, v: usize) -> Rule {
+        let sharp = self
+            .topo
+            .vertex_edges(v)
+            .iter()
+            .filter(|&&e| crease::is_sharp(self.edge_sharpness[e as usize]))
+            .count();
+        crease::vertex_rule(self.vertex_sharpness[v], sharp)
+    }
+
+    /// True if any edge or vertex still has semi-sharp (finite, non-zero) sharpness.
+    pub fn has_semi_sharp(&self) -> bool {
+        self.edge_sharpness
+            .iter()
+            .any(|&s| crease::is_semi_sharp(s))
+            || self
+                .vertex_sharpness
+                .iter()
+                .any(|&s| crease::is_semi_sharp(s))
+    }
+}

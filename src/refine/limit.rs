@@ -1,0 +1,1 @@
+//! Limit masks (to be written).

@@ -1,0 +1,190 @@
+//! Stencil tables: each output point is a weighted sum of input points. Built once from
+//! topology alone; applied to positions or any other per-vertex data, in parallel.
+
+use rayon::prelude::*;
+
+/// Floating-point element types that primvars may use; sums are accumulated in `f64`.
+pub trait Real: Copy + Send + Sync + Default + 'static {
+    /// Widens to f64.
+    fn to_f64(self) -> f64;
+    /// Narrows from f64 (round to nearest).
+    fn from_f64(x: f64) -> Self;
+}
+
+impl Real for f32 {
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+    #[inline]
+    fn from_f64(x: f64) -> Self {
+        x as f32
+    }
+}
+
+impl Real for f64 {
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn from_f64(x: f64) -> Self {
+        x
+    }
+}
+
+/// A sparse matrix in compressed rows: row `i` is output point `i`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StencilTable {
+    /// Row ranges into `indices` / `weights`; length rows + 1.
+    pub offsets: Vec<u32>,
+    /// Input point of each term.
+    pub indices: Vec<u32>,
+    /// Weight of each term.
+    pub weights: Vec<f64>,
+    /// Number of input points the table reads.
+    pub num_inputs: usize,
+}
+
+impl StencilTable {
+    /// An empty table reading `num_inputs` points.
+    pub fn new(num_inputs: usize) -> Self {
+        StencilTable {
+            offsets: vec![0],
+            indices: Vec::new(),
+            weights: Vec::new(),
+            num_inputs,
+        }
+    }
+
+    /// Number of output points.
+    pub fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// True when the table has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Terms of row `i`.
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let (a, b) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+        (&self.indices[a..b], &self.weights[a..b])
+    }
+
+    /// Appends a row; the terms are taken from the accumulator, which is cleared.
+    pub fn push_row(&mut self, acc: &mut Accumulator) {
+        for &(i, w) in acc.terms() {
+            if w != 0.0 {
+                self.indices.push(i);
+                self.weights.push(w);
+            }
+        }
+        self.offsets.push(self.indices.len() as u32);
+        acc.clear();
+    }
+
+    /// Appends the rows of `other` (which must read the same inputs).
+    pub fn append(&mut self, other: &StencilTable) {
+        let base = self.indices.len() as u32;
+        self.indices.extend_from_slice(&other.indices);
+        self.weights.extend_from_slice(&other.weights);
+        self.offsets
+            .extend(other.offsets[1..].iter().map(|&o| o + base));
+    }
+
+    /// Bytes used by the table.
+    pub fn bytes(&self) -> usize {
+        self.offsets.len() * 4 + self.indices.len() * 4 + self.weights.len() * 8
+    }
+
+    /// Applies the table to `src` (points of `width` components each) and returns the output
+    /// points, computed in parallel.
+    pub fn apply<T: Real>(&self, src: &[T], width: usize) -> Vec<T> {
+        let mut dst = vec![T::default(); self.len() * width];
+        self.apply_into(src, width, &mut dst);
+        dst
+    }
+
+    /// Like [`Self::apply`], writing into `dst` (length rows × width).
+    pub fn apply_into<T: Real>(&self, src: &[T], width: usize, dst: &mut [T]) {
+        assert_eq!(src.len(), self.num_inputs * width, "input length mismatch");
+        assert_eq!(dst.len(), self.len() * width, "output length mismatch");
+        if width == 0 {
+            return;
+        }
+        const CHUNK: usize = 1024;
+        dst.par_chunks_mut(CHUNK * width)
+            .enumerate()
+            .for_each(|(c, out)| {
+                let first = c * CHUNK;
+                let mut sum = [0.0f64; 16];
+                for (k, o) in out.chunks_exact_mut(width).enumerate() {
+                    let (idx, w) = self.row(first + k);
+                    if width <= 16 {
+                        let s = &mut sum[..width];
+                        s.fill(0.0);
+                        for (&i, &wt) in idx.iter().zip(w) {
+                            let p = &src[i as usize * width..i as usize * width + width];
+                            for (acc, &x) in s.iter_mut().zip(p) {
+                                *acc += wt * x.to_f64();
+                            }
+                        }
+                        for (d, &x) in o.iter_mut().zip(s.iter()) {
+                            *d = T::from_f64(x);
+                        }
+                    } else {
+                        for (j, d) in o.iter_mut().enumerate() {
+                            let mut acc = 0.0;
+                            for (&i, &wt) in idx.iter().zip(w) {
+                                acc += wt * src[i as usize * width + j].to_f64();
+                            }
+                            *d = T::from_f64(acc);
+                        }
+                    }
+                }
+            });
+    }
+
+    /// Applies the table to 3-D points.
+    pub fn apply_points(&self, src: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let flat: &[f64] = src.as_flattened();
+        let out = self.apply(flat, 3);
+        out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    }
+}
+
+/// Collects the weighted terms of one stencil row, merging repeated inputs. Rows are short
+/// (a vertex's one-ring), so a linear search beats hashing.
+#[derive(Clone, Debug, Default)]
+pub struct Accumulator {
+    terms: Vec<(u32, f64)>,
+}
+
+impl Accumulator {
+    /// An empty accumulator.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds `w` times input `i`.
+    #[inline]
+    pub fn add(&mut self, i: u32, w: f64) {
+        if let Some(t) = self.terms.iter_mut().find(|t| t.0 == i) {
+            t.1 += w;
+        } else {
+            self.terms.push((i, w));
+        }
+    }
+
+    /// Removes all terms.
+    pub fn clear(&mut self) {
+        self.terms.clear();
+    }
+
+    /// The current terms (input, weight), in the order first added.
+    pub fn terms(&self) -> &[(u32, f64)] {
+        &self.terms
+    }
+}

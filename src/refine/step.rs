@@ -1,0 +1,212 @@
+//! One uniform refinement step: the child level's topology and tags, and the stencil table
+//! that computes child vertices from parent vertices.
+//!
+//! Child vertex order (OpenSubdiv's default): children of vertices first (vertex `v` keeps
+//! index `v`), then face points, then edge points. Parent face `f` with `n` vertices becomes
+//! `n` quads; quad `k` is (child of vertex `k`, edge point of edge `k`, face point, edge point
+//! of edge `k-1`), which is the ptex sub-face convention.
+
+use super::crease;
+use super::level::Level;
+use super::rules::{edge_mask, face_mask, vertex_mask, VertexRing};
+use super::stencil::{Accumulator, StencilTable};
+use crate::error::Result;
+use crate::mesh::{CreaseMethod, Topology};
+use rayon::prelude::*;
+
+const CHUNK: usize = 2048;
+
+/// Index of the child of parent vertex `v`.
+#[inline]
+pub fn child_of_vertex(_parent: &Level, v: usize) -> u32 {
+    v as u32
+}
+
+/// Index of the face point of parent face `f`.
+#[inline]
+pub fn child_of_face(parent: &Level, f: usize) -> u32 {
+    (parent.num_vertices() + f) as u32
+}
+
+/// Index of the edge point of parent edge `e`.
+#[inline]
+pub fn child_of_edge(parent: &Level, e: usize) -> u32 {
+    (parent.num_vertices() + parent.num_faces() + e) as u32
+}
+
+/// Child sharpness of every edge at vertex `v`, in ring order.
+fn child_sharpness_at(parent: &Level, method: CreaseMethod, v: usize, out: &mut Vec<f32>) {
+    let mut inc = Vec::new();
+    parent.incident_sharpness(v, &mut inc);
+    out.clear();
+    out.extend(
+        inc.iter()
+            .map(|&s| crease::child_edge_sharpness(method, s, &inc)),
+    );
+}
+
+/// Builds table rows for `range` in parallel chunks, with `row` filling one row.
+fn parallel_rows<F>(count: usize, num_inputs: usize, row: F) -> StencilTable
+where
+    F: Fn(usize, &mut Accumulator) + Sync,
+{
+    let parts: Vec<StencilTable> = (0..count.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut t = StencilTable::new(num_inputs);
+            let mut acc = Accumulator::new();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
+                row(i, &mut acc);
+                t.push_row(&mut acc);
+            }
+            t
+        })
+        .collect();
+    let mut table = StencilTable::new(num_inputs);
+    for p in &parts {
+        table.append(p);
+    }
+    table
+}
+
+/// Refines `parent` once under the crease `method`.
+pub fn refine(parent: &Level, method: CreaseMethod) -> Result<(Level, StencilTable)> {
+    let topo = &parent.topo;
+    let nv = parent.num_vertices();
+    let nf = parent.num_faces();
+    let ne = topo.num_edges();
+
+    // Child faces.
+    let mut face_offsets = Vec::with_capacity(topo.face_verts.len() + 1);
+    let mut face_verts = Vec::with_capacity(topo.face_verts.len() * 4);
+    let mut face_hole = Vec::with_capacity(topo.face_verts.len());
+    face_offsets.push(0u32);
+    for f in 0..nf {
+        let fv = topo.face_vertices(f);
+        let fe = topo.face_edge_list(f);
+        let n = fv.len();
+        for k in 0..n {
+            face_verts.extend_from_slice(&[
+                child_of_vertex(parent, fv[k] as usize),
+                child_of_edge(parent, fe[k] as usize),
+                child_of_face(parent, f),
+                child_of_edge(parent, fe[(k + n - 1) % n] as usize),
+            ]);
+            face_offsets.push(face_verts.len() as u32);
+            face_hole.push(parent.face_hole[f]);
+        }
+    }
+    let child_topo = Topology::new(nv + nf + ne, &face_offsets, &face_verts)?;
+
+    // Child sharpness of each parent edge at each end: [at v0, at v1].
+    let halves: Vec<[f32; 2]> = if parent.edge_sharpness.iter().all(|&s| s == 0.0) {
+        vec![[0.0; 2]; ne]
+    } else {
+        let mut halves = vec![[0.0f32; 2]; ne];
+        let mut buf = Vec::new();
+        for v in 0..nv {
+            child_sharpness_at(parent, method, v, &mut buf);
+            for (&e, &s) in topo.vertex_edges(v).iter().zip(&buf) {
+                let end = if topo.edge_verts[e as usize][0] == v as u32 {
+                    0
+                } else {
+                    1
+                };
+                halves[e as usize][end] = s;
+            }
+        }
+        halves
+    };
+
+    let mut edge_sharpness = vec![0.0f32; child_topo.num_edges()];
+    for e in 0..ne {
+        let s = parent.edge_sharpness[e];
+        if s == 0.0 {
+            continue;
+        }
+        let [a, b] = topo.edge_verts[e];
+        let m = child_of_edge(parent, e);
+        for (end, v) in [(0, a), (1, b)] {
+            let cv = child_of_vertex(parent, v as usize);
+            if let Some(ce) = child_topo.find_edge(m, cv) {
+                edge_sharpness[ce as usize] = halves[e][end];
+            }
+        }
+    }
+    let mut vertex_sharpness = vec![0.0f32; child_topo.num_vertices];
+    for v in 0..nv {
+        vertex_sharpness[v] = crease::decrement(parent.vertex_sharpness[v]);
+    }
+
+    // Stencils: vertex children, face points, edge points.
+    let vertex_rows = parallel_rows(nv, nv, |v, acc| {
+        let edges = topo.vertex_edges(v);
+        let ends: Vec<u32> = edges
+            .iter()
+            .map(|&e| topo.other_vertex(e, v as u32))
+            .collect();
+        let es: Vec<f32> = edges
+            .iter()
+            .map(|&e| parent.edge_sharpness[e as usize])
+            .collect();
+        let cs: Vec<f32> = edges
+            .iter()
+            .map(|&e| {
+                let end = if topo.edge_verts[e as usize][0] == v as u32 {
+                    0
+                } else {
+                    1
+                };
+                halves[e as usize][end]
+            })
+            .collect();
+        let faces: Vec<&[u32]> = topo
+            .vertex_faces(v)
+            .iter()
+            .map(|&f| topo.face_vertices(f as usize))
+            .collect();
+        vertex_mask(
+            acc,
+            &VertexRing {
+                center: v as u32,
+                edge_ends: &ends,
+                edge_sharpness: &es,
+                child_edge_sharpness: &cs,
+                faces: &faces,
+                sharpness: parent.vertex_sharpness[v],
+                child_sharpness: vertex_sharpness[v],
+            },
+        );
+    });
+    let face_rows = parallel_rows(nf, nv, |f, acc| face_mask(acc, topo.face_vertices(f), 1.0));
+    let edge_rows = parallel_rows(ne, nv, |e, acc| {
+        let [a, b] = topo.edge_verts[e];
+        let faces: Vec<&[u32]> = topo
+            .edge_face_list(e as u32)
+            .iter()
+            .map(|&f| topo.face_vertices(f as usize))
+            .collect();
+        let [h0, h1] = halves[e];
+        edge_mask(
+            acc,
+            a,
+            b,
+            &faces,
+            parent.edge_sharpness[e],
+            crease::is_sharp(h0) && crease::is_sharp(h1),
+        );
+    });
+    let mut table = vertex_rows;
+    table.append(&face_rows);
+    table.append(&edge_rows);
+
+    Ok((
+        Level {
+            topo: child_topo,
+            edge_sharpness,
+            vertex_sharpness,
+            face_hole,
+        },
+        table,
+    ))
+}
