@@ -5,7 +5,9 @@
 //! tables, limit masks) → patches → dicing → BVH → rendering.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod error;
+pub mod info;
 pub mod mesh;
 pub mod refine;
 

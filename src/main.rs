@@ -1,1 +1,169 @@
-fn main() {}
+//! The `limitray` command-line tool.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use limitray::error::{Error, ErrorKind};
+use limitray::mesh::obj::{read_obj, write_obj};
+use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use limitray::refine::Refiner;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "limitray",
+    version,
+    about = "Exact Catmull-Clark limit surfaces: refine, evaluate, ray trace"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Boundary {
+    /// No boundary interpolation (boundary faces become holes).
+    None,
+    /// Boundary edges sharp, corners of one face smooth.
+    Edge,
+    /// Boundary edges sharp, corners of one face sharp.
+    Corner,
+}
+
+#[derive(clap::Args)]
+struct RuleArgs {
+    /// Use Chaikin's crease rule instead of the uniform one.
+    #[arg(long)]
+    chaikin: bool,
+    /// Boundary interpolation (default: the mesh's tag, else corner = edge-and-corner).
+    #[arg(long, value_enum)]
+    boundary: Option<Boundary>,
+}
+
+impl RuleArgs {
+    fn options(&self, mesh: &ControlMesh) -> Options {
+        let mut o = mesh.options;
+        if self.chaikin {
+            o.crease_method = CreaseMethod::Chaikin;
+        }
+        if let Some(b) = self.boundary {
+            o.boundary = match b {
+                Boundary::None => BoundaryInterpolation::None,
+                Boundary::Edge => BoundaryInterpolation::EdgeOnly,
+                Boundary::Corner => BoundaryInterpolation::EdgeAndCorner,
+            };
+        }
+        o
+    }
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print a summary of a control mesh: counts, valences, tags, warnings.
+    Info {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        #[command(flatten)]
+        rules: RuleArgs,
+    },
+    /// Uniformly refine a mesh and write level N as OBJ (quad faces).
+    Refine {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        /// Number of refinement steps.
+        #[arg(long, default_value_t = 1)]
+        level: usize,
+        #[command(flatten)]
+        rules: RuleArgs,
+        /// Output OBJ file ('-' for standard output).
+        #[arg(short = 'o', long = "output")]
+        output: PathBuf,
+        /// Write the exact limit positions of the level's vertices instead of the level's
+        /// control points.
+        #[arg(long)]
+        limit: bool,
+    },
+    /// Benchmark table building and application (JSON line on stdout).
+    BenchRefine(limitray::bench::RefineBenchArgs),
+}
+
+fn load(path: &Path) -> Result<ControlMesh, Error> {
+    let mesh = read_obj(path)?;
+    for w in &mesh.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(mesh)
+}
+
+fn run(cli: Cli) -> Result<(), Error> {
+    match cli.command {
+        Command::Info { mesh, rules } => {
+            let m = load(&mesh)?;
+            let opts = rules.options(&m);
+            let r = Refiner::with_options(&m, opts, 0)?;
+            for w in &r.warnings {
+                eprintln!("warning: {w}");
+            }
+            println!(
+                "{}",
+                limitray::info::summary(&mesh.display().to_string(), &m, &r.levels[0], &opts)
+            );
+            Ok(())
+        }
+        Command::Refine {
+            mesh,
+            level,
+            rules,
+            output,
+            limit,
+        } => {
+            let m = load(&mesh)?;
+            let opts = rules.options(&m);
+            let r = Refiner::with_options(&m, opts, level)?;
+            for w in &r.warnings {
+                eprintln!("warning: {w}");
+            }
+            let mut pos = r.refine_positions(&m.positions, level);
+            let lvl = &r.levels[level];
+            if limit {
+                pos = limitray::refine::limit::limit_positions(lvl, &pos, opts.crease_method);
+            }
+            let mut offsets = vec![0u32];
+            let mut verts = Vec::new();
+            for f in 0..lvl.num_faces() {
+                if !lvl.face_hole[f] {
+                    verts.extend_from_slice(lvl.topo.face_vertices(f));
+                    offsets.push(verts.len() as u32);
+                }
+            }
+            let io_err = |e: std::io::Error| {
+                Error::new(ErrorKind::Io, e.to_string()).in_file(output.display().to_string())
+            };
+            if output.as_os_str() == "-" {
+                let stdout = std::io::stdout();
+                let mut w = std::io::BufWriter::new(stdout.lock());
+                write_obj(&mut w, &pos, &offsets, &verts).map_err(io_err)?;
+            } else {
+                let f = std::fs::File::create(&output).map_err(io_err)?;
+                let mut w = std::io::BufWriter::new(f);
+                write_obj(&mut w, &pos, &offsets, &verts).map_err(io_err)?;
+            }
+            Ok(())
+        }
+        Command::BenchRefine(args) => {
+            let line = limitray::bench::refine_bench(&args)?;
+            println!("{line}");
+            Ok(())
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -2,6 +2,7 @@
 //! OBJ file ([`obj`]) or built in code ([`MeshBuilder`]), and its validated topology ([`topology`]).
 
 mod builder;
+pub mod generate;
 pub mod obj;
 pub mod topology;
 

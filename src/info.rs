@@ -1,0 +1,48 @@
+//! Human-readable summaries of control meshes (`limitray info`).
+
+use crate::mesh::{ControlMesh, Options};
+use crate::refine::Level;
+
+/// A JSON summary of a control mesh and its level-0 analysis.
+pub fn summary(name: &str, mesh: &ControlMesh, level: &Level, options: &Options) -> String {
+    let topo = &level.topo;
+    let mut valence_hist = std::collections::BTreeMap::new();
+    let mut max_valence = 0;
+    for v in 0..topo.num_vertices {
+        let n = topo.vertex_edges(v).len();
+        max_valence = max_valence.max(n);
+        *valence_hist.entry(n).or_insert(0usize) += 1;
+    }
+    let mut face_sizes = std::collections::BTreeMap::new();
+    for f in 0..topo.num_faces() {
+        *face_sizes.entry(topo.face_size(f)).or_insert(0usize) += 1;
+    }
+    let boundary = topo.vert_tags.iter().filter(|t| t.boundary).count();
+    let nonmanifold = topo.vert_tags.iter().filter(|t| t.nonmanifold).count();
+    let boundary_edges = (0..topo.num_edges())
+        .filter(|&e| topo.edge_is_boundary(e as u32))
+        .count();
+    let nonmanifold_edges = topo.edge_nonmanifold.iter().filter(|&&b| b).count();
+    let [lo, hi] = mesh.bounds();
+    let v = serde_json::json!({
+        "mesh": name,
+        "vertices": topo.num_vertices,
+        "faces": topo.num_faces(),
+        "edges": topo.num_edges(),
+        "face_sizes": face_sizes.iter().map(|(k, v)| (k.to_string(), serde_json::Value::from(*v))).collect::<serde_json::Map<_, _>>(),
+        "valences": valence_hist.iter().map(|(k, v)| (k.to_string(), serde_json::Value::from(*v))).collect::<serde_json::Map<_, _>>(),
+        "max_valence": max_valence,
+        "boundary_vertices": boundary,
+        "boundary_edges": boundary_edges,
+        "nonmanifold_vertices": nonmanifold,
+        "nonmanifold_edges": nonmanifold_edges,
+        "creases": mesh.creases.len(),
+        "corners": mesh.corners.len(),
+        "holes": level.face_hole.iter().filter(|&&h| h).count(),
+        "boundary_interpolation": format!("{:?}", options.boundary),
+        "crease_method": format!("{:?}", options.crease_method),
+        "bounds": [lo, hi],
+        "warnings": mesh.warnings.len(),
+    });
+    serde_json::to_string_pretty(&v).unwrap_or_default()
+}
