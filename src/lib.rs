@@ -4,6 +4,8 @@
 //! [`mesh`] (control mesh, tags, validated topology) → [`refine`] (subdivision rules, stencil
 //! tables, limit masks) → patches → dicing → BVH → rendering.
 #![warn(missing_docs)]
+// Mesh code indexes several parallel arrays by the same element index; range loops say so.
+#![allow(clippy::needless_range_loop)]
 
 pub mod bench;
 pub mod error;

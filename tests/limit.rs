@@ -1,4 +1,5 @@
 //! Limit masks: closed-form cases, consistency across levels, and convergence of refinement.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 

@@ -23,6 +23,7 @@
 //!   B-spline corner of a boundary, a convention elsewhere: a sharp vertex has no tangent plane).
 //! - non-manifold vertices: position by the rule in force (corner or crease); tangents along
 //!   two of their edges.
+//!
 //! Tangent magnitudes are given in the units of the level's parameter (one edge = 1).
 
 use super::crease::{self, Rule};
