@@ -55,6 +55,11 @@ impl Level {
                 ),
             }
         }
+        // Boundary edges the tags made infinitely sharp: with boundary interpolation `None`
+        // only these keep their faces (OpenSubdiv's semantics, checked on catmark_edgenone).
+        let tagged_sharp_boundary: Vec<bool> = (0..ne)
+            .map(|e| topo.edge_is_boundary(e as u32) && crease::is_infinite(edge_sharpness[e]))
+            .collect();
         for e in 0..ne {
             if topo.edge_face_count(e as u32) != 2 || topo.edge_nonmanifold[e] {
                 edge_sharpness[e] = SHARPNESS_INFINITE;
@@ -93,12 +98,17 @@ impl Level {
             face_hole[h as usize] = true;
         }
         if options.boundary == BoundaryInterpolation::None {
+            // A face is a hole when one of its vertices has a boundary edge that is not
+            // infinitely sharp by tag.
+            let open: Vec<bool> = (0..nv)
+                .map(|v| {
+                    topo.vertex_edges(v)
+                        .iter()
+                        .any(|&e| topo.edge_is_boundary(e) && !tagged_sharp_boundary[e as usize])
+                })
+                .collect();
             for (f, hole) in face_hole.iter_mut().enumerate() {
-                if topo
-                    .face_vertices(f)
-                    .iter()
-                    .any(|&v| topo.vert_tags[v as usize].boundary)
-                {
+                if topo.face_vertices(f).iter().any(|&v| open[v as usize]) {
                     *hole = true;
                 }
             }
