@@ -92,7 +92,6 @@ impl Topology {
         let nfv = face_verts.len();
         // Edges: sort face-edges by their unordered vertex pair.
         let mut keys: Vec<(u64, u32)> = Vec::with_capacity(nfv);
-        let mut fe_face = vec![0u32; nfv];
         for f in 0..nf {
             let (a, b) = (face_offsets[f] as usize, face_offsets[f + 1] as usize);
             let n = b - a;
@@ -101,43 +100,65 @@ impl Topology {
                 let v1 = face_verts[a + (i + 1) % n];
                 let (lo, hi) = if v0 < v1 { (v0, v1) } else { (v1, v0) };
                 keys.push((((lo as u64) << 32) | hi as u64, (a + i) as u32));
-                fe_face[a + i] = f as u32;
             }
         }
         keys.sort_unstable();
         let mut face_edges = vec![0u32; nfv];
         let mut edge_verts: Vec<[u32; 2]> = Vec::new();
-        let mut edge_face_counts: Vec<u32> = Vec::new();
-        let mut edge_nonmanifold: Vec<bool> = Vec::new();
         let mut i = 0;
         while i < keys.len() {
             let key = keys[i].0;
+            let e = edge_verts.len() as u32;
             let mut j = i;
             while j < keys.len() && keys[j].0 == key {
+                face_edges[keys[j].1 as usize] = e;
                 j += 1;
             }
-            let e = edge_verts.len() as u32;
-            let lo = (key >> 32) as u32;
-            let hi = key as u32;
-            // Orientation of each use: does the face run lo -> hi?
-            let mut forward = 0;
-            for &(_, fe) in &keys[i..j] {
-                face_edges[fe as usize] = e;
-                if face_verts[fe as usize] == lo {
-                    forward += 1;
-                }
-            }
-            let uses = j - i;
-            let nonman = uses > 2 || (uses == 2 && forward != 1);
-            // Keep the first use's direction for edge_verts.
-            let first = keys[i].1 as usize;
-            let v0 = face_verts[first];
+            // Keep the first use's direction.
+            let (lo, hi) = ((key >> 32) as u32, key as u32);
+            let v0 = face_verts[keys[i].1 as usize];
             edge_verts.push(if v0 == lo { [lo, hi] } else { [hi, lo] });
-            edge_face_counts.push(uses as u32);
-            edge_nonmanifold.push(nonman);
             i = j;
         }
+        Ok(Self::from_edges(
+            num_vertices,
+            face_offsets.to_vec(),
+            face_verts.to_vec(),
+            face_edges,
+            edge_verts,
+        ))
+    }
+
+    /// Completes the adjacency from faces whose edges are already known: `face_edges[i]` is
+    /// the edge from `face_verts[i]` to the face's next vertex, and `edge_verts` gives each
+    /// edge's ends. Refinement uses this to skip edge discovery; the caller guarantees
+    /// consistency (faces of ≥ 3 vertices, indices in range).
+    pub fn from_edges(
+        num_vertices: usize,
+        face_offsets: Vec<u32>,
+        face_verts: Vec<u32>,
+        face_edges: Vec<u32>,
+        edge_verts: Vec<[u32; 2]>,
+    ) -> Self {
+        let nf = face_offsets.len().saturating_sub(1);
+        let nfv = face_verts.len();
         let ne = edge_verts.len();
+        let mut fe_face = vec![0u32; nfv];
+        for f in 0..nf {
+            fe_face[face_offsets[f] as usize..face_offsets[f + 1] as usize].fill(f as u32);
+        }
+        // Uses of each edge, and how many run from its first vertex to its second.
+        let mut edge_face_counts = vec![0u32; ne];
+        let mut forward = vec![0u32; ne];
+        for (fe, &e) in face_edges.iter().enumerate() {
+            edge_face_counts[e as usize] += 1;
+            if face_verts[fe] == edge_verts[e as usize][0] {
+                forward[e as usize] += 1;
+            }
+        }
+        let edge_nonmanifold: Vec<bool> = (0..ne)
+            .map(|e| edge_face_counts[e] > 2 || (edge_face_counts[e] == 2 && forward[e] != 1))
+            .collect();
         let edge_face_offsets = ranges(&edge_face_counts);
         let mut edge_faces = vec![0u32; nfv];
         {
@@ -150,7 +171,7 @@ impl Topology {
         }
         // Vertex -> face corners, unordered first.
         let mut vcount = vec![0u32; num_vertices];
-        for &v in face_verts {
+        for &v in &face_verts {
             vcount[v as usize] += 1;
         }
         let vert_face_offsets = ranges(&vcount);
@@ -169,8 +190,8 @@ impl Topology {
         }
         let mut topo = Topology {
             num_vertices,
-            face_offsets: face_offsets.to_vec(),
-            face_verts: face_verts.to_vec(),
+            face_offsets,
+            face_verts,
             face_edges,
             edge_verts,
             edge_face_offsets,
@@ -179,46 +200,48 @@ impl Topology {
             vert_face_offsets,
             vert_faces: vec![0; nfv],
             vert_face_corner: vec![0; nfv],
-            vert_edge_offsets: Vec::new(),
-            vert_edges: Vec::new(),
+            vert_edge_offsets: Vec::with_capacity(num_vertices + 1),
+            vert_edges: Vec::with_capacity(nfv + nfv / 8),
             vert_tags: vec![VertexTag::default(); num_vertices],
         };
         // Order each vertex's ring.
-        let mut edge_counts = vec![0u32; num_vertices];
-        let mut rings: Vec<Vec<u32>> = Vec::with_capacity(num_vertices);
         let mut fan = Vec::new();
+        let mut edges = Vec::new();
+        let mut vert_edges = std::mem::take(&mut topo.vert_edges);
+        let mut vert_edge_offsets = std::mem::take(&mut topo.vert_edge_offsets);
+        vert_edge_offsets.push(0);
         for v in 0..num_vertices {
             let (a, b) = (
                 topo.vert_face_offsets[v] as usize,
                 topo.vert_face_offsets[v + 1] as usize,
             );
-            let corners = &vf_unordered[a..b];
-            let (edges, tag) = topo.order_ring(corners, &mut fan);
+            let tag = topo.order_ring(&vf_unordered[a..b], &mut fan, &mut edges);
             topo.vert_tags[v] = tag;
             for (k, &(f, c)) in fan.iter().enumerate() {
                 topo.vert_faces[a + k] = f;
                 topo.vert_face_corner[a + k] = c;
             }
-            edge_counts[v] = edges.len() as u32;
-            rings.push(edges);
+            vert_edges.extend_from_slice(&edges);
+            vert_edge_offsets.push(vert_edges.len() as u32);
         }
-        topo.vert_edge_offsets = ranges(&edge_counts);
-        topo.vert_edges = rings.into_iter().flatten().collect();
-        debug_assert_eq!(topo.edge_verts.len(), ne);
-        Ok(topo)
+        topo.vert_edges = vert_edges;
+        topo.vert_edge_offsets = vert_edge_offsets;
+        topo
     }
 
-    /// Orders the face corners around one vertex; returns its edges and tags and leaves the
-    /// ordered corners in `fan`.
+    /// Orders the face corners around one vertex; returns its tags and leaves the ordered
+    /// corners in `fan` and its edges in `edges`.
     fn order_ring(
         &self,
         corners: &[(u32, u32)],
         fan: &mut Vec<(u32, u32)>,
-    ) -> (Vec<u32>, VertexTag) {
+        edges: &mut Vec<u32>,
+    ) -> VertexTag {
         fan.clear();
+        edges.clear();
         let mut tag = VertexTag::default();
         if corners.is_empty() {
-            return (Vec::new(), tag);
+            return tag;
         }
         let lead = |&(f, c): &(u32, u32)| self.face_edge(f as usize, c as usize);
         let trail = |&(f, c): &(u32, u32)| {
@@ -244,7 +267,7 @@ impl Topology {
                 .position(|c| self.edge_face_count(lead(c)) == 1)
                 .unwrap_or(0);
             let mut cur = corners[start];
-            let mut edges = vec![lead(&cur)];
+            edges.push(lead(&cur));
             loop {
                 fan.push(cur);
                 let t = trail(&cur);
@@ -270,14 +293,14 @@ impl Topology {
                 cur = *next;
             }
             if !nonman && fan.len() == corners.len() {
-                return (edges, tag);
+                return tag;
             }
         }
         // Non-manifold: keep faces in input order, edges unique.
         tag.nonmanifold = true;
         fan.clear();
         fan.extend_from_slice(corners);
-        let mut edges = Vec::new();
+        edges.clear();
         for c in corners {
             for e in [lead(c), trail(c)] {
                 if !edges.contains(&e) {
@@ -285,7 +308,7 @@ impl Topology {
                 }
             }
         }
-        (edges, tag)
+        tag
     }
 
     /// Number of faces.

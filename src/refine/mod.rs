@@ -52,7 +52,7 @@ impl Refiner {
         let mut levels = vec![base];
         let mut tables = Vec::with_capacity(max_level);
         for _ in 0..max_level {
-            let (child, table) = step::refine(levels.last().unwrap(), options.crease_method)?;
+            let (child, table) = step::refine(levels.last().unwrap(), options.crease_method);
             levels.push(child);
             tables.push(table);
         }

@@ -10,7 +10,6 @@ use super::crease;
 use super::level::Level;
 use super::rules::{edge_mask, face_mask, vertex_mask, VertexRing};
 use super::stencil::{Accumulator, StencilTable};
-use crate::error::Result;
 use crate::mesh::{CreaseMethod, Topology};
 use rayon::prelude::*;
 
@@ -70,68 +69,85 @@ where
 }
 
 /// Refines `parent` once under the crease `method`.
-pub fn refine(parent: &Level, method: CreaseMethod) -> Result<(Level, StencilTable)> {
+pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
     let topo = &parent.topo;
     let nv = parent.num_vertices();
     let nf = parent.num_faces();
     let ne = topo.num_edges();
 
-    // Child faces.
-    let mut face_offsets = Vec::with_capacity(topo.face_verts.len() + 1);
-    let mut face_verts = Vec::with_capacity(topo.face_verts.len() * 4);
-    let mut face_hole = Vec::with_capacity(topo.face_verts.len());
+    // Child edges, numbered structurally: parent edge e gives 2e (at its first vertex) and
+    // 2e + 1 (at its second); corner k of parent face f (face-vertex slot o + k) gives the
+    // interior edge 2·ne + o + k from the edge point of edge k to the face point.
+    let nfv = topo.face_verts.len();
+    let mut edge_verts = Vec::with_capacity(2 * ne + nfv);
+    for e in 0..ne {
+        let [a, b] = topo.edge_verts[e];
+        let m = child_of_edge(parent, e);
+        edge_verts.push([child_of_vertex(parent, a as usize), m]);
+        edge_verts.push([m, child_of_vertex(parent, b as usize)]);
+    }
+    for f in 0..nf {
+        let cf = child_of_face(parent, f);
+        for &e in topo.face_edge_list(f) {
+            edge_verts.push([child_of_edge(parent, e as usize), cf]);
+        }
+    }
+    // Half of parent edge e that touches parent vertex v.
+    let half = |e: u32, v: u32| 2 * e + (topo.edge_verts[e as usize][0] != v) as u32;
+
+    // Child faces: quad k of face f is (v_k, edge point k, face point, edge point k-1).
+    let mut face_offsets = Vec::with_capacity(nfv + 1);
+    let mut face_verts = Vec::with_capacity(nfv * 4);
+    let mut face_edges = Vec::with_capacity(nfv * 4);
+    let mut face_hole = Vec::with_capacity(nfv);
     face_offsets.push(0u32);
     for f in 0..nf {
         let fv = topo.face_vertices(f);
         let fe = topo.face_edge_list(f);
+        let o = topo.face_offsets[f];
         let n = fv.len();
         for k in 0..n {
+            let prev = (k + n - 1) % n;
             face_verts.extend_from_slice(&[
                 child_of_vertex(parent, fv[k] as usize),
                 child_of_edge(parent, fe[k] as usize),
                 child_of_face(parent, f),
-                child_of_edge(parent, fe[(k + n - 1) % n] as usize),
+                child_of_edge(parent, fe[prev] as usize),
+            ]);
+            face_edges.extend_from_slice(&[
+                half(fe[k], fv[k]),
+                (2 * ne) as u32 + o + k as u32,
+                (2 * ne) as u32 + o + prev as u32,
+                half(fe[prev], fv[k]),
             ]);
             face_offsets.push(face_verts.len() as u32);
             face_hole.push(parent.face_hole[f]);
         }
     }
-    let child_topo = Topology::new(nv + nf + ne, &face_offsets, &face_verts)?;
+    let child_topo = Topology::from_edges(
+        nv + nf + ne,
+        face_offsets,
+        face_verts,
+        face_edges,
+        edge_verts,
+    );
 
     // Child sharpness of each parent edge at each end: [at v0, at v1].
-    let halves: Vec<[f32; 2]> = if parent.edge_sharpness.iter().all(|&s| s == 0.0) {
-        vec![[0.0; 2]; ne]
-    } else {
-        let mut halves = vec![[0.0f32; 2]; ne];
+    let mut halves = vec![[0.0f32; 2]; ne];
+    if parent.edge_sharpness.iter().any(|&s| s != 0.0) {
         let mut buf = Vec::new();
         for v in 0..nv {
             child_sharpness_at(parent, method, v, &mut buf);
             for (&e, &s) in topo.vertex_edges(v).iter().zip(&buf) {
-                let end = if topo.edge_verts[e as usize][0] == v as u32 {
-                    0
-                } else {
-                    1
-                };
+                let end = (topo.edge_verts[e as usize][0] != v as u32) as usize;
                 halves[e as usize][end] = s;
             }
         }
-        halves
-    };
-
+    }
     let mut edge_sharpness = vec![0.0f32; child_topo.num_edges()];
     for e in 0..ne {
-        let s = parent.edge_sharpness[e];
-        if s == 0.0 {
-            continue;
-        }
-        let [a, b] = topo.edge_verts[e];
-        let m = child_of_edge(parent, e);
-        for (end, v) in [(0, a), (1, b)] {
-            let cv = child_of_vertex(parent, v as usize);
-            if let Some(ce) = child_topo.find_edge(m, cv) {
-                edge_sharpness[ce as usize] = halves[e][end];
-            }
-        }
+        edge_sharpness[2 * e] = halves[e][0];
+        edge_sharpness[2 * e + 1] = halves[e][1];
     }
     let mut vertex_sharpness = vec![0.0f32; child_topo.num_vertices];
     for v in 0..nv {
@@ -200,7 +216,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> Result<(Level, StencilTab
     table.append(&face_rows);
     table.append(&edge_rows);
 
-    Ok((
+    (
         Level {
             topo: child_topo,
             edge_sharpness,
@@ -208,5 +224,5 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> Result<(Level, StencilTab
             face_hole,
         },
         table,
-    ))
+    )
 }
