@@ -9,6 +9,7 @@
 //!   more edge than faces; an interior vertex has as many edges as faces.
 
 use crate::error::{Error, ErrorKind, Result};
+use rayon::prelude::*;
 
 /// Per-vertex topological tags.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -202,27 +203,58 @@ impl Topology {
             vert_face_corner: vec![0; nfv],
             vert_edge_offsets: Vec::with_capacity(num_vertices + 1),
             vert_edges: Vec::with_capacity(nfv + nfv / 8),
-            vert_tags: vec![VertexTag::default(); num_vertices],
+            vert_tags: Vec::with_capacity(num_vertices),
         };
-        // Order each vertex's ring.
-        let mut fan = Vec::new();
-        let mut edges = Vec::new();
+        // Order each vertex's ring, in parallel blocks of vertices.
+        const BLOCK: usize = 4096;
+        struct Block {
+            tags: Vec<VertexTag>,
+            fans: Vec<(u32, u32)>,
+            edges: Vec<u32>,
+            counts: Vec<u32>,
+        }
+        let blocks: Vec<Block> = (0..num_vertices.div_ceil(BLOCK))
+            .into_par_iter()
+            .map(|blk| {
+                let range = blk * BLOCK..((blk + 1) * BLOCK).min(num_vertices);
+                let mut out = Block {
+                    tags: Vec::with_capacity(range.len()),
+                    fans: Vec::new(),
+                    edges: Vec::new(),
+                    counts: Vec::with_capacity(range.len()),
+                };
+                let mut fan = Vec::new();
+                let mut edges = Vec::new();
+                for v in range {
+                    let (a, b) = (
+                        topo.vert_face_offsets[v] as usize,
+                        topo.vert_face_offsets[v + 1] as usize,
+                    );
+                    out.tags
+                        .push(topo.order_ring(&vf_unordered[a..b], &mut fan, &mut edges));
+                    out.fans.extend_from_slice(&fan);
+                    out.edges.extend_from_slice(&edges);
+                    out.counts.push(edges.len() as u32);
+                }
+                out
+            })
+            .collect();
         let mut vert_edges = std::mem::take(&mut topo.vert_edges);
         let mut vert_edge_offsets = std::mem::take(&mut topo.vert_edge_offsets);
         vert_edge_offsets.push(0);
-        for v in 0..num_vertices {
-            let (a, b) = (
-                topo.vert_face_offsets[v] as usize,
-                topo.vert_face_offsets[v + 1] as usize,
-            );
-            let tag = topo.order_ring(&vf_unordered[a..b], &mut fan, &mut edges);
-            topo.vert_tags[v] = tag;
-            for (k, &(f, c)) in fan.iter().enumerate() {
-                topo.vert_faces[a + k] = f;
-                topo.vert_face_corner[a + k] = c;
+        let mut at = 0;
+        for blk in blocks {
+            for (k, &(f, c)) in blk.fans.iter().enumerate() {
+                topo.vert_faces[at + k] = f;
+                topo.vert_face_corner[at + k] = c;
             }
-            vert_edges.extend_from_slice(&edges);
-            vert_edge_offsets.push(vert_edges.len() as u32);
+            at += blk.fans.len();
+            vert_edges.extend_from_slice(&blk.edges);
+            for c in blk.counts {
+                let last = *vert_edge_offsets.last().unwrap();
+                vert_edge_offsets.push(last + c);
+            }
+            topo.vert_tags.extend(blk.tags);
         }
         topo.vert_edges = vert_edges;
         topo.vert_edge_offsets = vert_edge_offsets;
