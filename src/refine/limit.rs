@@ -528,11 +528,17 @@ fn subspace_tangents(s: &[Vec<f64>], ne: usize) -> (Vec<f64>, Vec<f64>) {
         let mut y = [left_mul(&q[0], s), left_mul(&q[1], s)];
         // Gram-Schmidt.
         let n0 = y[0].iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n0 < 1e-300 {
+            break; // degenerate ring: keep the previous pair
+        }
         y[0].iter_mut().for_each(|x| *x /= n0);
         let d: f64 = y[0].iter().zip(&y[1]).map(|(a, b)| a * b).sum();
         let (a, b) = y.split_at_mut(1);
         b[0].iter_mut().zip(&a[0]).for_each(|(x, p)| *x -= d * p);
         let n1 = y[1].iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n1 < 1e-300 {
+            break;
+        }
         y[1].iter_mut().for_each(|x| *x /= n1);
         q = y;
     }

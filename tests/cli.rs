@@ -1,0 +1,443 @@
+//! End-to-end tests of the `limitray` binary: `info`, `refine` and its options, output to a
+//! file and to standard output, and the exit code and `file:line:` messages of bad input.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A scratch directory under the system temporary directory, removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> Self {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::SeqCst);
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.subsec_nanos())
+            .unwrap_or(0);
+        let dir = std::env::temp_dir().join(format!(
+            "limitray-cli-{tag}-{}-{n}-{nanos}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+
+    /// Writes `text` to `name` in the directory and returns its path.
+    fn file(&self, name: &str, text: &str) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The cube of OpenSubdiv's `catmark_cube.obj` (8 vertices, 6 quads).
+const CUBE: &str = "\
+# unit cube
+v -0.5 -0.5 0.5
+v 0.5 -0.5 0.5
+v -0.5 0.5 0.5
+v 0.5 0.5 0.5
+v -0.5 0.5 -0.5
+v 0.5 0.5 -0.5
+v -0.5 -0.5 -0.5
+v 0.5 -0.5 -0.5
+f 1 2 4 3
+f 3 4 6 5
+f 5 6 8 7
+f 7 8 2 1
+f 2 8 6 4
+f 7 1 3 5
+";
+
+fn limitray(args: &[&dyn AsRef<std::ffi::OsStr>]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_limitray"));
+    for a in args {
+        cmd.arg(a);
+    }
+    cmd.output().expect("failed to run limitray")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_success(o: &Output, what: &str) {
+    assert!(
+        o.status.success(),
+        "{what}: exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        o.status.code(),
+        stdout(o),
+        stderr(o)
+    );
+}
+
+fn assert_exit_2(o: &Output, what: &str) -> String {
+    let err = stderr(o);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{what}: expected exit code 2\nstdout:\n{}\nstderr:\n{err}",
+        stdout(o)
+    );
+    assert!(
+        err.contains("error: "),
+        "{what}: no `error:` line on stderr: {err}"
+    );
+    err
+}
+
+/// Counts `v` and `f` lines of OBJ text.
+fn count_v_f(text: &str) -> (usize, usize) {
+    let v = text.lines().filter(|l| l.starts_with("v ")).count();
+    let f = text.lines().filter(|l| l.starts_with("f ")).count();
+    (v, f)
+}
+
+fn points_of(text: &str) -> Vec<[f64; 3]> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let c: Vec<f64> = l
+                .split_whitespace()
+                .map(|x| x.parse().expect("number"))
+                .collect();
+            assert_eq!(c.len(), 3, "v line with {} numbers: {l}", c.len());
+            [c[0], c[1], c[2]]
+        })
+        .collect()
+}
+
+/// Runs `refine` on `mesh` with extra arguments, writing to a file, and returns its text.
+fn refine_to_file(dir: &TempDir, mesh: &Path, out_name: &str, extra: &[&str]) -> String {
+    let out = dir.path(out_name);
+    let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"refine", &mesh];
+    for a in extra {
+        args.push(a);
+    }
+    args.push(&"-o");
+    args.push(&out);
+    let o = limitray(&args);
+    assert_success(&o, &format!("refine {extra:?}"));
+    std::fs::read_to_string(&out).expect("output file written")
+}
+
+#[test]
+fn info_prints_json_with_counts() {
+    let dir = TempDir::new("info");
+    let mesh = dir.file("cube.obj", CUBE);
+    let o = limitray(&[&"info", &mesh]);
+    assert_success(&o, "info");
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("info prints JSON");
+    assert_eq!(json["vertices"], 8, "{json}");
+    assert_eq!(json["faces"], 6, "{json}");
+    assert_eq!(json["edges"], 12, "{json}");
+    assert_eq!(json["max_valence"], 3, "{json}");
+    assert_eq!(json["nonmanifold_vertices"], 0, "{json}");
+}
+
+#[test]
+fn refine_cube_level_2_writes_98_vertices_and_96_faces() {
+    let dir = TempDir::new("refine");
+    let mesh = dir.file("cube.obj", CUBE);
+    let text = refine_to_file(&dir, &mesh, "out.obj", &["--level", "2"]);
+    assert_eq!(count_v_f(&text), (98, 96));
+    // Every face is a quad of valid 1-based indices.
+    for l in text.lines().filter(|l| l.starts_with("f ")) {
+        let idx: Vec<usize> = l[2..]
+            .split_whitespace()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(idx.len(), 4, "{l}");
+        assert!(idx.iter().all(|&i| (1..=98).contains(&i)), "{l}");
+    }
+    // The output is itself a valid mesh.
+    let again = refine_to_file(&dir, &dir.path("out.obj"), "again.obj", &["--level", "1"]);
+    assert_eq!(count_v_f(&again), (386, 384));
+}
+
+#[test]
+fn chaikin_and_boundary_options_are_accepted() {
+    let dir = TempDir::new("options");
+    let mesh = dir.file(
+        "creased.obj",
+        &format!("{CUBE}t crease 2/1/0 0 1 2.5\nt crease 2/1/0 1 3 1.3\n"),
+    );
+    let uniform = refine_to_file(&dir, &mesh, "uniform.obj", &["--level", "2"]);
+    let chaikin = refine_to_file(&dir, &mesh, "chaikin.obj", &["--level", "2", "--chaikin"]);
+    assert_eq!(count_v_f(&chaikin), (98, 96));
+    assert_ne!(
+        points_of(&uniform),
+        points_of(&chaikin),
+        "Chaikin's rule changes the creases"
+    );
+    for b in ["none", "edge", "corner"] {
+        let text = refine_to_file(
+            &dir,
+            &mesh,
+            &format!("b-{b}.obj"),
+            &["--level", "1", "--boundary", b],
+        );
+        // A closed cube has no boundary: every option gives the same 26 vertices, 24 quads.
+        assert_eq!(count_v_f(&text), (26, 24), "--boundary {b}");
+    }
+    // On an open mesh (one quad) the options matter: `none` drops the boundary faces.
+    let quad = dir.file(
+        "quad.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+    );
+    let edge = refine_to_file(
+        &dir,
+        &quad,
+        "q-edge.obj",
+        &["--level", "1", "--boundary", "edge"],
+    );
+    let corner = refine_to_file(
+        &dir,
+        &quad,
+        "q-corner.obj",
+        &["--level", "1", "--boundary", "corner"],
+    );
+    let none = refine_to_file(
+        &dir,
+        &quad,
+        "q-none.obj",
+        &["--level", "1", "--boundary", "none"],
+    );
+    assert_eq!(count_v_f(&edge), (9, 4));
+    assert_eq!(count_v_f(&corner), (9, 4));
+    assert_eq!(count_v_f(&none).1, 0);
+    assert_ne!(points_of(&edge), points_of(&corner), "smooth corners move");
+    // An unknown boundary value is a usage error (exit code 2 as well).
+    let o = limitray(&[
+        &"refine",
+        &quad,
+        &"--boundary",
+        &"sideways",
+        &"-o",
+        &dir.path("x.obj"),
+    ]);
+    let err = assert_exit_2(&o, "--boundary sideways");
+    assert!(err.contains("sideways"), "{err}");
+}
+
+#[test]
+fn limit_positions_differ_from_control_points() {
+    let dir = TempDir::new("limit");
+    let mesh = dir.file("cube.obj", CUBE);
+    let plain = points_of(&refine_to_file(&dir, &mesh, "plain.obj", &["--level", "1"]));
+    let limit = points_of(&refine_to_file(
+        &dir,
+        &mesh,
+        "limit.obj",
+        &["--level", "1", "--limit"],
+    ));
+    assert_eq!(plain.len(), limit.len());
+    let moved = plain
+        .iter()
+        .zip(&limit)
+        .filter(|(p, q)| common::dist(p, q) > 1e-6)
+        .count();
+    assert_eq!(
+        moved,
+        plain.len(),
+        "every vertex of a smooth cube moves to the limit"
+    );
+    // The limit surface of the cube lies inside its control points' hull.
+    for q in &limit {
+        assert!(q.iter().all(|c| c.abs() < 0.5), "{q:?}");
+    }
+}
+
+#[test]
+fn dash_writes_to_stdout() {
+    let dir = TempDir::new("stdout");
+    let mesh = dir.file("cube.obj", CUBE);
+    let o = limitray(&[&"refine", &mesh, &"--level", &"2", &"-o", &"-"]);
+    assert_success(&o, "refine -o -");
+    let text = stdout(&o);
+    assert_eq!(count_v_f(&text), (98, 96));
+    assert!(!dir.path("-").exists(), "`-` must not create a file");
+    // Same content as writing to a file.
+    let file = refine_to_file(&dir, &mesh, "out.obj", &["--level", "2"]);
+    assert_eq!(text, file);
+}
+
+/// Runs `info` and `refine` on bad OBJ text and checks exit code 2 and a `FILE:LINE:` prefix.
+fn check_bad_obj(dir: &TempDir, name: &str, text: &str, line: usize, needle: &str) {
+    let mesh = dir.file(name, text);
+    let located = format!("{}:{line}:", mesh.display());
+    for args in [
+        vec![&"info" as &dyn AsRef<std::ffi::OsStr>, &mesh],
+        vec![&"refine", &mesh, &"--level", &"1", &"-o", &"-"],
+    ] {
+        let o = limitray(&args);
+        let err = assert_exit_2(&o, name);
+        assert!(
+            err.contains(&located),
+            "{name}: stderr lacks `{located}`: {err}"
+        );
+        assert!(
+            err.to_lowercase().contains(needle),
+            "{name}: stderr lacks `{needle}`: {err}"
+        );
+        assert!(
+            stdout(&o).is_empty(),
+            "{name}: nothing may be written on error"
+        );
+    }
+}
+
+#[test]
+fn bad_obj_exits_2_with_file_and_line() {
+    let dir = TempDir::new("bad");
+    check_bad_obj(
+        &dir,
+        "two_corners.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\n# a face needs three corners\nf 1 2\n",
+        5,
+        "face",
+    );
+    check_bad_obj(
+        &dir,
+        "bad_number.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1.5.2 0\nf 1 2 3\n",
+        3,
+        "1.5.2",
+    );
+    check_bad_obj(
+        &dir,
+        "negative_sharpness.obj",
+        &format!("{CUBE}t crease 2/1/0 0 1 -1.0\n"),
+        CUBE.lines().count() + 1,
+        "sharpness",
+    );
+    check_bad_obj(
+        &dir,
+        "out_of_range.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nf 1 3 9\n",
+        5,
+        "out of range",
+    );
+    check_bad_obj(
+        &dir,
+        "repeated.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\nf 1 2 3 3\n",
+        6,
+        "appears twice",
+    );
+}
+
+#[test]
+fn missing_file_exits_2_naming_it() {
+    let dir = TempDir::new("missing");
+    let mesh = dir.path("does_not_exist.obj");
+    for args in [
+        vec![&"info" as &dyn AsRef<std::ffi::OsStr>, &mesh],
+        vec![&"refine", &mesh, &"-o", &dir.path("out.obj")],
+    ] {
+        let o = limitray(&args);
+        let err = assert_exit_2(&o, "missing file");
+        assert!(
+            err.contains(&mesh.display().to_string()),
+            "stderr does not name the file: {err}"
+        );
+    }
+    assert!(!dir.path("out.obj").exists());
+}
+
+#[test]
+fn unwritable_output_exits_2_naming_it() {
+    let dir = TempDir::new("unwritable");
+    let mesh = dir.file("cube.obj", CUBE);
+    let out = dir.path("no_such_dir/out.obj");
+    let o = limitray(&[&"refine", &mesh, &"-o", &out]);
+    let err = assert_exit_2(&o, "output in a missing directory");
+    assert!(
+        err.contains(&out.display().to_string()),
+        "stderr does not name the output: {err}"
+    );
+}
+
+#[test]
+fn level_above_maximum_exits_2() {
+    let dir = TempDir::new("level");
+    let mesh = dir.file("cube.obj", CUBE);
+    let o = limitray(&[
+        &"refine",
+        &mesh,
+        &"--level",
+        &"13",
+        &"-o",
+        &dir.path("out.obj"),
+    ]);
+    let err = assert_exit_2(&o, "--level 13");
+    assert!(
+        err.contains("13") && err.contains("12"),
+        "message should name the level and the maximum: {err}"
+    );
+    assert!(!dir.path("out.obj").exists());
+}
+
+#[test]
+fn crease_on_missing_edge_warns_and_succeeds() {
+    let dir = TempDir::new("warn");
+    // Vertices 0 and 3 are diagonal on the first face: no edge joins them.
+    let mesh = dir.file("diag.obj", &format!("{CUBE}t crease 2/1/0 0 3 2.0\n"));
+    let o = limitray(&[&"refine", &mesh, &"--level", &"1", &"-o", &"-"]);
+    assert_success(&o, "crease on a missing edge");
+    let err = stderr(&o);
+    assert!(err.contains("warning"), "no warning: {err}");
+    assert!(
+        err.contains("no edge joins vertices 0 and 3"),
+        "warning should name the vertices: {err}"
+    );
+    assert!(
+        err.contains(&format!("{}:{}:", mesh.display(), CUBE.lines().count() + 1)),
+        "warning should name the tag's line: {err}"
+    );
+    assert_eq!(count_v_f(&stdout(&o)), (26, 24));
+    // The ignored crease changes nothing.
+    let plain = dir.file("plain.obj", CUBE);
+    let p = limitray(&[&"refine", &plain, &"--level", &"1", &"-o", &"-"]);
+    assert_success(&p, "plain cube");
+    assert_eq!(stdout(&o), stdout(&p));
+}
+
+#[test]
+fn refined_cube_matches_hbr_baseline() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let dir = TempDir::new("baseline");
+    let mesh = models.join("opensubdiv/catmark_cube.obj");
+    // `NAME_level1.obj` holds two refinement steps.
+    let base = models.join("opensubdiv-hbr-baseline/catmark_cube_level1.obj");
+    let text = refine_to_file(&dir, &mesh, "cube2.obj", &["--level", "2"]);
+    let ours = points_of(&text);
+    let theirs = common::read_points(&base);
+    assert_eq!(ours.len(), theirs.len());
+    assert_eq!(count_v_f(&text).1, common::count_faces(&base));
+    let diag = limitray::mesh::obj::read_obj(&mesh).unwrap().diagonal();
+    let d1 = common::max_nearest_distance(&ours, &theirs) / diag;
+    let d2 = common::max_nearest_distance(&theirs, &ours) / diag;
+    println!("catmark_cube level 2 vs Hbr: {d1:.2e} {d2:.2e} of the diagonal");
+    assert!(d1 <= 1e-6 && d2 <= 1e-6, "{d1:e} {d2:e}");
+}
