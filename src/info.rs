@@ -46,3 +46,36 @@ pub fn summary(name: &str, mesh: &ControlMesh, level: &Level, options: &Options)
     });
     serde_json::to_string_pretty(&v).unwrap_or_default()
 }
+
+/// A JSON summary of a patch table (`limitray stats`).
+pub fn patch_stats(name: &str, table: &crate::patch::PatchTable, build_ms: f64) -> String {
+    let mut by_kind = serde_json::Map::new();
+    let mut by_level = serde_json::Map::new();
+    let mut detail = serde_json::Map::new();
+    for ((kind, level), &n) in &table.stats.by_kind_level {
+        let e = by_kind
+            .entry(kind.clone())
+            .or_insert(serde_json::Value::from(0usize));
+        *e = serde_json::Value::from(e.as_u64().unwrap_or(0) as usize + n);
+        let e = by_level
+            .entry(level.to_string())
+            .or_insert(serde_json::Value::from(0usize));
+        *e = serde_json::Value::from(e.as_u64().unwrap_or(0) as usize + n);
+        detail.insert(format!("{kind}@{level}"), serde_json::Value::from(n));
+    }
+    let v = serde_json::json!({
+        "mesh": name,
+        "patches_total": table.patches.len(),
+        "bytes_total": table.bytes(),
+        "patches_by_type": by_kind,
+        "patches_by_level": by_level,
+        "patches_by_type_and_level": detail,
+        "refined_vertices": table.stats.refined_vertices,
+        "control_points": table.points.len(),
+        "stencil_bytes": table.point_stencils.bytes(),
+        "max_level": table.options.max_level,
+        "single_crease": table.options.single_crease,
+        "build_ms": build_ms,
+    });
+    serde_json::to_string_pretty(&v).unwrap_or_default()
+}

@@ -8,9 +8,11 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bench;
+pub mod cli_eval;
 pub mod error;
 pub mod info;
 pub mod mesh;
+pub mod patch;
 pub mod refine;
 
 pub use error::{Error, ErrorKind, Result};

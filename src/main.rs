@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use limitray::error::{Error, ErrorKind};
 use limitray::mesh::obj::{read_obj, write_obj};
 use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use limitray::patch::{PatchOptions, PatchTable};
 use limitray::refine::Refiner;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -82,6 +83,33 @@ enum Command {
         #[arg(long)]
         limit: bool,
     },
+    /// Evaluate the exact limit surface: stdin lines `face u v` or `face k u v`, stdout
+    /// `x y z dux duy duz dvx dvy dvz`.
+    Eval {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        #[command(flatten)]
+        rules: RuleArgs,
+        /// Maximum isolation level of the patch table.
+        #[arg(long, default_value_t = limitray::patch::table::DEFAULT_MAX_LEVEL)]
+        max_level: usize,
+    },
+    /// Patch-table statistics as JSON (patch counts by type and level, memory).
+    Stats {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        #[command(flatten)]
+        rules: RuleArgs,
+        /// Maximum isolation level.
+        #[arg(long, default_value_t = limitray::patch::table::DEFAULT_MAX_LEVEL)]
+        max_level: usize,
+        /// Isolate semi-sharp creases by subdivision only (no single-crease patches).
+        #[arg(long)]
+        no_single_crease: bool,
+        /// Override every crease's sharpness.
+        #[arg(long)]
+        sharpness: Option<f32>,
+    },
     /// Benchmark table building and application (JSON line on stdout).
     BenchRefine(limitray::bench::RefineBenchArgs),
 }
@@ -147,6 +175,59 @@ fn run(cli: Cli) -> Result<(), Error> {
                 let mut w = std::io::BufWriter::new(f);
                 write_obj(&mut w, &pos, &offsets, &verts).map_err(io_err)?;
             }
+            Ok(())
+        }
+        Command::Eval {
+            mesh,
+            rules,
+            max_level,
+        } => {
+            let m = load(&mesh)?;
+            let opts = rules.options(&m);
+            let table = PatchTable::with_options(
+                &m,
+                opts,
+                PatchOptions {
+                    max_level,
+                    ..PatchOptions::default()
+                },
+            )?;
+            limitray::cli_eval::run(&table, std::io::stdin().lock(), std::io::stdout().lock())
+        }
+        Command::Stats {
+            mesh,
+            rules,
+            max_level,
+            no_single_crease,
+            sharpness,
+        } => {
+            let mut m = load(&mesh)?;
+            if let Some(s) = sharpness {
+                if s.is_nan() || s < 0.0 {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!("--sharpness {s} must be ≥ 0"),
+                    ));
+                }
+                for c in &mut m.creases {
+                    c.sharpness = s;
+                }
+            }
+            let opts = rules.options(&m);
+            let t0 = std::time::Instant::now();
+            let table = PatchTable::with_options(
+                &m,
+                opts,
+                PatchOptions {
+                    max_level,
+                    single_crease: !no_single_crease,
+                },
+            )?;
+            let ms = t0.elapsed().as_secs_f64() * 1e3;
+            println!(
+                "{}",
+                limitray::info::patch_stats(&mesh.display().to_string(), &table, ms)
+            );
             Ok(())
         }
         Command::BenchRefine(args) => {

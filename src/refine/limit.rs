@@ -96,6 +96,30 @@ impl LimitStencils {
     }
 }
 
+/// Exact limit position and tangents of one vertex of `level`, given the level's positions.
+pub fn vertex_limit_frame(
+    level: &Level,
+    v: usize,
+    pos: &[[f64; 3]],
+    method: CreaseMethod,
+) -> LimitFrame {
+    let [p, du, dv] = vertex_limit_masks(level, v, method);
+    let apply = |terms: &[(u32, f64)]| {
+        let mut out = [0.0; 3];
+        for &(i, w) in terms {
+            for k in 0..3 {
+                out[k] += w * pos[i as usize][k];
+            }
+        }
+        out
+    };
+    LimitFrame {
+        position: apply(&p),
+        du: apply(&du),
+        dv: apply(&dv),
+    }
+}
+
 /// Exact limit positions of every vertex of `level`, given the level's positions.
 pub fn limit_positions(level: &Level, pos: &[[f64; 3]], method: CreaseMethod) -> Vec<[f64; 3]> {
     LimitStencils::new(level, method).position.apply_points(pos)
@@ -326,7 +350,7 @@ fn vertex_limit_masks(level: &Level, v: usize, method: CreaseMethod) -> [Vec<(u3
     let (_, s_rows) = ring.subdivide(method);
     let size = s_rows.len();
     let s = dense(&s_rows, size);
-    let pos_local = dominant_left(&s);
+    let pos_local = dominant_left(&s_rows, size);
     let (du_local, dv_local) = match rule {
         Rule::Smooth if sharp.is_empty() && ne >= 3 => smooth_tangents(ne),
         Rule::Smooth => subspace_tangents(&s, ne),
@@ -376,18 +400,27 @@ fn left_mul(x: &[f64], s: &[Vec<f64>]) -> Vec<f64> {
     out
 }
 
-/// Dominant left eigenvector (eigenvalue 1) of a subdivision matrix, normalised to sum 1.
-fn dominant_left(s: &[Vec<f64>]) -> Vec<f64> {
-    let mut x = vec![0.0; s.len()];
+/// Dominant left eigenvector (eigenvalue 1) of a subdivision matrix given by sparse rows,
+/// normalised to sum 1.
+fn dominant_left(rows: &[Vec<(u32, f64)>], size: usize) -> Vec<f64> {
+    let mut x = vec![0.0; size];
     x[0] = 1.0;
-    for _ in 0..2000 {
-        let y = left_mul(&x, s);
+    let mut y = vec![0.0; size];
+    for _ in 0..4000 {
+        y.fill(0.0);
+        for (xi, row) in x.iter().zip(rows) {
+            if *xi != 0.0 {
+                for &(j, w) in row {
+                    y[j as usize] += xi * w;
+                }
+            }
+        }
         let diff = y
             .iter()
             .zip(&x)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        x = y;
+        std::mem::swap(&mut x, &mut y);
         if diff < 1e-17 {
             break;
         }

@@ -1,0 +1,75 @@
+//! The line-oriented `limitray eval` tool: `face u v` or `face k u v` in, nine numbers out.
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::patch::PatchTable;
+use std::io::{BufRead, Write};
+
+fn parse_sample(line: &str) -> std::result::Result<(usize, usize, f64, f64), String> {
+    let toks: Vec<&str> = line.split_whitespace().collect();
+    let int = |t: &str| {
+        t.parse::<usize>()
+            .map_err(|_| format!("invalid index '{t}'"))
+    };
+    let num = |t: &str| {
+        t.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("invalid parameter '{t}'"))
+    };
+    match toks.len() {
+        3 => Ok((int(toks[0])?, 0, num(toks[1])?, num(toks[2])?)),
+        4 => Ok((int(toks[0])?, int(toks[1])?, num(toks[2])?, num(toks[3])?)),
+        n => Err(format!(
+            "expected 'face u v' or 'face k u v', found {n} fields"
+        )),
+    }
+}
+
+/// Reads samples from `input`, writes one line per input line to `output` (nine `nan` for a bad
+/// sample, with a message naming the line on stderr). Returns an error at the end if any line
+/// was bad.
+pub fn run(table: &PatchTable, input: impl BufRead, mut output: impl Write) -> Result<()> {
+    let mut bad = 0usize;
+    let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
+    for (i, line) in input.lines().enumerate() {
+        let line = line.map_err(io)?;
+        if line.trim().is_empty() {
+            writeln!(output).map_err(io)?;
+            continue;
+        }
+        let res = parse_sample(&line)
+            .map_err(|m| Error::new(ErrorKind::Parse, m))
+            .and_then(|(f, k, u, v)| table.eval(f, k, u, v));
+        match res {
+            Ok(s) => {
+                let f = |x: f64| format!("{x:?}");
+                writeln!(
+                    output,
+                    "{} {} {} {} {} {} {} {} {}",
+                    f(s.p[0]),
+                    f(s.p[1]),
+                    f(s.p[2]),
+                    f(s.du[0]),
+                    f(s.du[1]),
+                    f(s.du[2]),
+                    f(s.dv[0]),
+                    f(s.dv[1]),
+                    f(s.dv[2])
+                )
+                .map_err(io)?;
+            }
+            Err(e) => {
+                bad += 1;
+                eprintln!("stdin:{}: {}", i + 1, e);
+                writeln!(output, "nan nan nan nan nan nan nan nan nan").map_err(io)?;
+            }
+        }
+    }
+    output.flush().map_err(io)?;
+    if bad > 0 {
+        return Err(
+            Error::new(ErrorKind::Parse, format!("{bad} invalid sample line(s)")).in_file("stdin"),
+        );
+    }
+    Ok(())
+}

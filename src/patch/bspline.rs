@@ -1,0 +1,224 @@
+//! Uniform cubic B-splines: the 1-D basis with its derivatives, and the bicubic tensor-product
+//! patch of a 4 × 4 control grid.
+//!
+//! Control grids use OpenSubdiv's regular-patch layout: `cp[4 * j + i]` is the point in column
+//! `i` (along `u`) and row `j` (along `v`). The patch's face is bounded by points 5, 6, 10 and 9
+//! (grid positions (1,1), (2,1), (2,2), (1,2)); `(u, v) = (0, 0)` is the limit-surface corner
+//! near point 5 and `(1, 1)` the corner near point 10.
+
+/// A 4 × 4 control grid, row-major (`4 * j + i`, `i` along `u`, `j` along `v`).
+pub type ControlGrid = [[f64; 3]; 16];
+
+/// A 4 × 4 matrix acting on the four control points of a curve (`out[r] = Σ_c m[r][c] in[c]`).
+pub type Mat4 = [[f64; 4]; 4];
+
+/// The 4 × 4 identity matrix.
+pub const IDENTITY: Mat4 = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+/// Values of the four uniform cubic B-spline basis functions on the segment `t ∈ [0, 1]`
+/// (control point 1 sits near `t = 0`, control point 2 near `t = 1`).
+#[inline]
+pub fn basis(t: f64) -> [f64; 4] {
+    let s = 1.0 - t;
+    let t2 = t * t;
+    let t3 = t2 * t;
+    [
+        s * s * s / 6.0,
+        (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0,
+        (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0,
+        t3 / 6.0,
+    ]
+}
+
+/// First derivatives of [`basis`] with respect to `t`.
+#[inline]
+pub fn basis_d1(t: f64) -> [f64; 4] {
+    let s = 1.0 - t;
+    [
+        -0.5 * s * s,
+        0.5 * t * (3.0 * t - 4.0),
+        0.5 * (-3.0 * t * t + 2.0 * t + 1.0),
+        0.5 * t * t,
+    ]
+}
+
+/// Second derivatives of [`basis`] with respect to `t`.
+#[inline]
+pub fn basis_d2(t: f64) -> [f64; 4] {
+    [1.0 - t, 3.0 * t - 2.0, 1.0 - 3.0 * t, t]
+}
+
+/// Four weights over a curve's control points and their first and second derivatives with
+/// respect to the curve parameter: one direction of a tensor-product evaluation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Basis {
+    /// Weights of the point.
+    pub w: [f64; 4],
+    /// Weights of the first derivative.
+    pub d1: [f64; 4],
+    /// Weights of the second derivative.
+    pub d2: [f64; 4],
+}
+
+impl Basis {
+    /// The plain uniform cubic B-spline basis at `t`.
+    #[inline]
+    pub fn at(t: f64) -> Self {
+        Basis {
+            w: basis(t),
+            d1: basis_d1(t),
+            d2: basis_d2(t),
+        }
+    }
+
+    /// The weights after a change of control points `P' = M P`: `N(t) M` (a row vector times
+    /// `m`), so that evaluating the result on `P` equals evaluating `self` on `M P`.
+    #[inline]
+    pub fn transformed(&self, m: &Mat4) -> Self {
+        let mul = |n: &[f64; 4]| {
+            let mut out = [0.0; 4];
+            for (r, &nr) in n.iter().enumerate() {
+                for c in 0..4 {
+                    out[c] += nr * m[r][c];
+                }
+            }
+            out
+        };
+        Basis {
+            w: mul(&self.w),
+            d1: mul(&self.d1),
+            d2: mul(&self.d2),
+        }
+    }
+
+    /// The same weights seen from the other end of the curve: control points in reverse order
+    /// and the parameter running the other way (`t ↦ 1 − t`), so the first derivative changes
+    /// sign.
+    #[inline]
+    pub fn reversed(&self) -> Self {
+        let rev = |a: &[f64; 4]| [a[3], a[2], a[1], a[0]];
+        let neg = |a: [f64; 4]| [-a[0], -a[1], -a[2], -a[3]];
+        Basis {
+            w: rev(&self.w),
+            d1: neg(rev(&self.d1)),
+            d2: rev(&self.d2),
+        }
+    }
+}
+
+/// A point of a patch with its first and second partial derivatives.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchPoint {
+    /// Position.
+    pub p: [f64; 3],
+    /// `∂P/∂u`.
+    pub du: [f64; 3],
+    /// `∂P/∂v`.
+    pub dv: [f64; 3],
+    /// `∂²P/∂u²`.
+    pub duu: [f64; 3],
+    /// `∂²P/∂u∂v`.
+    pub duv: [f64; 3],
+    /// `∂²P/∂v²`.
+    pub dvv: [f64; 3],
+}
+
+#[inline]
+fn axpy(acc: &mut [f64; 3], w: f64, p: &[f64; 3]) {
+    acc[0] += w * p[0];
+    acc[1] += w * p[1];
+    acc[2] += w * p[2];
+}
+
+/// Tensor-product evaluation of `cp` with weights `bu` along `u` (columns `i`) and `bv` along
+/// `v` (rows `j`): `P = Σ_j Σ_i bu.w[i] bv.w[j] cp[4 j + i]`, and likewise for the
+/// derivatives.
+pub fn eval_tensor(cp: &ControlGrid, bu: &Basis, bv: &Basis) -> PatchPoint {
+    let mut out = PatchPoint::default();
+    for j in 0..4 {
+        // Contract row j along u first.
+        let mut r = [0.0; 3];
+        let mut ru = [0.0; 3];
+        let mut ruu = [0.0; 3];
+        for i in 0..4 {
+            let p = &cp[4 * j + i];
+            axpy(&mut r, bu.w[i], p);
+            axpy(&mut ru, bu.d1[i], p);
+            axpy(&mut ruu, bu.d2[i], p);
+        }
+        axpy(&mut out.p, bv.w[j], &r);
+        axpy(&mut out.dv, bv.d1[j], &r);
+        axpy(&mut out.dvv, bv.d2[j], &r);
+        axpy(&mut out.du, bv.w[j], &ru);
+        axpy(&mut out.duv, bv.d1[j], &ru);
+        axpy(&mut out.duu, bv.w[j], &ruu);
+    }
+    out
+}
+
+/// The bicubic uniform B-spline patch of `cp` at `(u, v)`, with derivatives.
+#[inline]
+pub fn eval(cp: &ControlGrid, u: f64, v: f64) -> PatchPoint {
+    eval_tensor(cp, &Basis::at(u), &Basis::at(v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn partition_of_unity_and_derivatives() {
+        for k in 0..=16 {
+            let t = k as f64 / 16.0;
+            let b = Basis::at(t);
+            assert!((b.w.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+            assert!(b.d1.iter().sum::<f64>().abs() < 1e-15);
+            assert!(b.d2.iter().sum::<f64>().abs() < 1e-15);
+            // Linear precision: control points at -1, 0, 1, 2 reproduce t.
+            let x: f64 = (0..4).map(|i| b.w[i] * (i as f64 - 1.0)).sum();
+            assert!((x - t).abs() < 1e-15);
+            let h = 1e-6;
+            let (p, m) = (basis(t + h), basis(t - h));
+            let (p1, m1) = (basis_d1(t + h), basis_d1(t - h));
+            for i in 0..4 {
+                assert!(((p[i] - m[i]) / (2.0 * h) - b.d1[i]).abs() < 1e-9);
+                assert!(((p1[i] - m1[i]) / (2.0 * h) - b.d2[i]).abs() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn reversed_is_mirror() {
+        // By symmetry N_i(t) = N_{3-i}(1 - t): reversing the basis at 1 - t gives the basis at
+        // t, and d/dt of the reversed weights is the derivative at t.
+        let t = 0.3;
+        let a = Basis::at(1.0 - t).reversed();
+        let b = Basis::at(t);
+        for i in 0..4 {
+            assert!((a.w[i] - b.w[i]).abs() < 1e-15);
+            assert!((a.d1[i] - b.d1[i]).abs() < 1e-15);
+            assert!((a.d2[i] - b.d2[i]).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn bilinear_grid_reproduces_parameters() {
+        let mut cp = [[0.0; 3]; 16];
+        for j in 0..4 {
+            for i in 0..4 {
+                cp[4 * j + i] = [i as f64 - 1.0, j as f64 - 1.0, 0.0];
+            }
+        }
+        let p = eval(&cp, 0.25, 0.75);
+        let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|c| (a[c] - b[c]).abs() < 1e-15);
+        assert!(close(p.p, [0.25, 0.75, 0.0]));
+        assert!(close(p.du, [1.0, 0.0, 0.0]));
+        assert!(close(p.dv, [0.0, 1.0, 0.0]));
+        assert!(close(p.duu, [0.0; 3]) && close(p.duv, [0.0; 3]) && close(p.dvv, [0.0; 3]));
+    }
+}

@@ -1,0 +1,155 @@
+//! Small local meshes for feature-adaptive refinement: the neighbourhood of one face cut out
+//! of a level, refined on its own, with per-point data (stencil weights or positions) carried
+//! along.
+//!
+//! The limit surface over a face depends only on its one-ring; one level of refinement of a
+//! neighbourhood is exact wherever the rules only read points of the neighbourhood. Cutting
+//! out two rings of faces keeps every point that the face's descendants need exact: the wrong
+//! values at the cut (rules applied to incomplete rings) move inwards by one edge of the
+//! current level per level, ½ + ¼ + … < 1 face, while the descendants' one-rings reach only
+//! their own size beyond the face. Chaikin's rule reads the edges at both ends of an edge, so
+//! the second ring also keeps the vertices of the first ring complete.
+
+use crate::mesh::{CreaseMethod, Topology};
+use crate::refine::{step, Level};
+use std::collections::HashMap;
+
+/// A level (usually a small neighbourhood) and `width` numbers of data per vertex.
+#[derive(Clone, Debug)]
+pub struct LocalMesh {
+    /// Topology and tags.
+    pub level: Level,
+    /// Per-vertex data, `width` values per vertex.
+    pub data: Vec<f64>,
+    /// Values per vertex.
+    pub width: usize,
+}
+
+impl LocalMesh {
+    /// One uniform refinement step of the whole local mesh.
+    pub fn refine(&self, method: CreaseMethod) -> LocalMesh {
+        let (level, table) = step::refine(&self.level, method);
+        let data = table.apply(&self.data, self.width);
+        LocalMesh {
+            level,
+            data,
+            width: self.width,
+        }
+    }
+
+    /// The data of vertex `v`.
+    pub fn point(&self, v: usize) -> &[f64] {
+        &self.data[v * self.width..(v + 1) * self.width]
+    }
+
+    /// Cuts out the faces within `rings` vertex-rings of `face` (which becomes face 0 of the
+    /// result, with the same vertex order), copying sharpness, holes and data.
+    pub fn extract(
+        level: &Level,
+        data: &[f64],
+        width: usize,
+        face: usize,
+        rings: usize,
+    ) -> LocalMesh {
+        Self::extract_with_map(level, data, width, face, rings).0
+    }
+
+    /// Like [`Self::extract`], also returning the original index of each local vertex.
+    pub fn extract_with_map(
+        level: &Level,
+        data: &[f64],
+        width: usize,
+        face: usize,
+        rings: usize,
+    ) -> (LocalMesh, Vec<u32>) {
+        let (lvl, verts_old, _) = extract_faces(level, &[face as u32], rings);
+        let mut out = Vec::with_capacity(verts_old.len() * width);
+        for &v in &verts_old {
+            out.extend_from_slice(&data[v as usize * width..(v as usize + 1) * width]);
+        }
+        let mesh = LocalMesh {
+            level: lvl,
+            data: out,
+            width,
+        };
+        (mesh, verts_old)
+    }
+}
+
+/// Cuts the faces within `rings` vertex-rings of the `seeds` out of `level`. Returns the new
+/// level (seeds first, in order, keeping their vertex order), the original index of each new
+/// vertex, and the new index of each seed.
+pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<u32>, Vec<u32>) {
+    let topo = &level.topo;
+    let mut faces: Vec<u32> = Vec::new();
+    let mut seen: HashMap<u32, u32> = HashMap::new();
+    let mut seed_new = Vec::with_capacity(seeds.len());
+    for &f in seeds {
+        let id = *seen.entry(f).or_insert_with(|| {
+            faces.push(f);
+            (faces.len() - 1) as u32
+        });
+        seed_new.push(id);
+    }
+    let mut frontier = faces.clone();
+    for _ in 0..rings {
+        let mut next = Vec::new();
+        for &f in &frontier {
+            for &v in topo.face_vertices(f as usize) {
+                for &g in topo.vertex_faces(v as usize) {
+                    if let std::collections::hash_map::Entry::Vacant(e) = seen.entry(g) {
+                        e.insert(faces.len() as u32);
+                        faces.push(g);
+                        next.push(g);
+                    }
+                }
+            }
+        }
+        frontier = next;
+    }
+    let mut vmap: HashMap<u32, u32> = HashMap::new();
+    let mut verts_old = Vec::new();
+    let mut offsets = vec![0u32];
+    let mut fverts = Vec::new();
+    for &f in &faces {
+        for &v in topo.face_vertices(f as usize) {
+            let id = *vmap.entry(v).or_insert_with(|| {
+                verts_old.push(v);
+                (verts_old.len() - 1) as u32
+            });
+            fverts.push(id);
+        }
+        offsets.push(fverts.len() as u32);
+    }
+    let sub = Topology::new(verts_old.len(), &offsets, &fverts)
+        .expect("a cut-out of a valid level is valid");
+    let edge_sharpness = sub
+        .edge_verts
+        .iter()
+        .map(|&[a, b]| {
+            topo.find_edge(verts_old[a as usize], verts_old[b as usize])
+                .map_or(0.0, |e| level.edge_sharpness[e as usize])
+        })
+        .collect();
+    let vertex_sharpness = verts_old
+        .iter()
+        .map(|&v| level.vertex_sharpness[v as usize])
+        .collect();
+    let face_hole = faces.iter().map(|&f| level.face_hole[f as usize]).collect();
+    (
+        Level {
+            topo: sub,
+            edge_sharpness,
+            vertex_sharpness,
+            face_hole,
+        },
+        verts_old,
+        seed_new,
+    )
+}
+
+/// Index of child `k` of face `f` after [`step::refine`]: children are numbered by the parent's
+/// face-vertex slots.
+pub fn child_face(level: &Level, f: usize, k: usize) -> usize {
+    level.topo.face_offsets[f] as usize + k
+}

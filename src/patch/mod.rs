@@ -1,0 +1,14 @@
+//! Feature-adaptive patches of the limit surface: bicubic B-spline patches ([`bspline`]),
+//! regular patches with one semi-sharp crease ([`single_crease`], paper 000), the recognition
+//! of regular faces ([`regular`]), local neighbourhoods for adaptive refinement ([`local`]) and
+//! the patch table with exact evaluation ([`table`]).
+
+pub mod bspline;
+pub mod local;
+pub mod regular;
+pub mod single_crease;
+pub mod table;
+
+pub use bspline::{Basis, ControlGrid, Mat4, PatchPoint};
+pub use single_crease::{CreaseCurve, SingleCreasePatch};
+pub use table::{PatchOptions, PatchTable, Sample};

@@ -1,0 +1,293 @@
+//! Recognising faces whose limit surface is a bicubic B-spline patch (interior, boundary,
+//! corner, infinitely sharp creases as boundaries) or a regular patch with one semi-sharp crease
+//! (paper 000), and gathering their 16 control points.
+//!
+//! Grid layout as in [`super::bspline`]: `4 j + i`; the face's corner `k` sits at grid position
+//! `C[k]` with its own axes `U[k]` (towards corner k+1) and `V[k]` (towards corner k−1).
+//! Missing points across a boundary or infinitely sharp edge are phantoms, reflections of the
+//! row inside: `P(outside) = 2 P(on the edge) − P(inside)`, which reproduces the crease and
+//! corner rules exactly.
+
+use crate::refine::crease;
+use crate::refine::Level;
+
+/// Grid position of each face corner.
+const C: [[i32; 2]; 4] = [[1, 1], [2, 1], [2, 2], [1, 2]];
+/// Axis towards the next corner.
+const U: [[i32; 2]; 4] = [[1, 0], [0, 1], [-1, 0], [0, -1]];
+/// Axis towards the previous corner.
+const V: [[i32; 2]; 4] = [[0, 1], [-1, 0], [0, -1], [1, 0]];
+
+/// A control point as a combination of level vertices.
+pub type Combo = Vec<(u32, f64)>;
+
+/// What kind of regular patch a face is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RegularKind {
+    /// Bicubic B-spline; `closed` counts the face's edges that are boundaries or infinitely
+    /// sharp (0 interior, 1 boundary, 2 corner, …).
+    BSpline {
+        /// Number of the face's edges that are boundaries (phantom rows).
+        closed: u8,
+    },
+    /// B-spline with one semi-sharp crease of `sharpness` on face edge `edge`.
+    SingleCrease {
+        /// Face edge (0..4, edge k from corner k to k+1) carrying the crease.
+        edge: u8,
+        /// Its sharpness.
+        sharpness: f32,
+    },
+}
+
+fn at(p: [i32; 2]) -> usize {
+    (4 * p[1] + p[0]) as usize
+}
+fn add(a: [i32; 2], b: [i32; 2]) -> [i32; 2] {
+    [a[0] + b[0], a[1] + b[1]]
+}
+fn sub(a: [i32; 2], b: [i32; 2]) -> [i32; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn reflect(grid: &[Option<Combo>; 16], on: usize, inside: usize) -> Combo {
+    let mut out: Combo = Vec::new();
+    let mut push = |i: u32, w: f64| {
+        if let Some(t) = out.iter_mut().find(|t| t.0 == i) {
+            t.1 += w;
+        } else {
+            out.push((i, w));
+        }
+    };
+    for &(i, w) in grid[on].as_ref().unwrap() {
+        push(i, 2.0 * w);
+    }
+    for &(i, w) in grid[inside].as_ref().unwrap() {
+        push(i, -w);
+    }
+    out.retain(|t| t.1 != 0.0);
+    out
+}
+
+/// Classifies face `f` of `level` and gathers its control points, or `None` when the face is
+/// irregular (needs more refinement). `single_crease` allows single-crease patches (uniform
+/// crease rule only: Chaikin's rule makes the crease's decrement depend on edges outside the
+/// patch).
+pub fn classify(
+    level: &Level,
+    f: usize,
+    single_crease: bool,
+) -> Option<(RegularKind, [Combo; 16])> {
+    let topo = &level.topo;
+    let fv = topo.face_vertices(f);
+    if fv.len() != 4 {
+        return None;
+    }
+    let fe = topo.face_edge_list(f);
+    let es = |e: u32| level.edge_sharpness[e as usize];
+    // The single semi-sharp crease, if any.
+    let mut crease_edge = None;
+    for k in 0..4 {
+        let s = es(fe[k]);
+        if crease::is_semi_sharp(s) {
+            if !single_crease || crease_edge.is_some() {
+                return None;
+            }
+            crease_edge = Some((k, s));
+        }
+    }
+    // Edge states: open (surface continues into a quad across it) or closed (infinitely sharp).
+    let mut open = [false; 4];
+    for k in 0..4 {
+        let e = fe[k];
+        let s = es(e);
+        if crease::is_infinite(s) {
+            continue;
+        }
+        if topo.edge_face_count(e) != 2 || topo.edge_nonmanifold[e as usize] {
+            return None;
+        }
+        let other = topo
+            .edge_face_list(e)
+            .iter()
+            .copied()
+            .find(|&g| g as usize != f)?;
+        if topo.face_size(other as usize) != 4 {
+            return None;
+        }
+        open[k] = true;
+    }
+    // Vertex conditions.
+    for k in 0..4 {
+        let v = fv[k] as usize;
+        if topo.vert_tags[v].nonmanifold {
+            return None;
+        }
+        let vs = level.vertex_sharpness[v];
+        let edges = topo.vertex_edges(v);
+        let faces = topo.vertex_faces(v);
+        let lead = fe[k];
+        let trail = fe[(k + 3) % 4];
+        let mut sharp = 0;
+        for &e in edges {
+            let s = es(e);
+            if crease::is_semi_sharp(s) {
+                // allowed only as the single crease or its straight continuation
+                let (ck, cs) = crease_edge?;
+                if s != cs {
+                    return None;
+                }
+                let ce = fe[ck];
+                if e != ce {
+                    // continuation: opposite the crease edge in a valence-4 interior ring
+                    let i = edges.iter().position(|&x| x == ce)?;
+                    if edges.len() != 4 || topo.vert_tags[v].boundary || edges[(i + 2) % 4] != e {
+                        return None;
+                    }
+                }
+            }
+            if crease::is_sharp(s) {
+                sharp += 1;
+            }
+        }
+        if crease::is_semi_sharp(vs) {
+            return None;
+        }
+        let (ol, ot) = (open[k], open[(k + 3) % 4]);
+        let ci = faces.iter().position(|&g| g as usize == f)?;
+        match (ol, ot) {
+            (true, true) => {
+                // interior, valence 4, smooth (or the single crease passing through)
+                if vs != 0.0 || edges.len() != 4 || faces.len() != 4 || topo.vert_tags[v].boundary {
+                    return None;
+                }
+                if faces.iter().any(|&g| topo.face_size(g as usize) != 4) {
+                    return None;
+                }
+                let crease_through =
+                    crease_edge.is_some_and(|(ck, _)| ck == k || (ck + 1) % 4 == k);
+                if sharp != if crease_through { 2 } else { 0 } {
+                    return None;
+                }
+            }
+            (false, false) => {
+                // corner: both face edges infinitely sharp, the face alone in its sector, the
+                // vertex rule is the corner rule with only infinite sharpness around
+                let rule = level.vertex_rule(v);
+                if rule != crease::Rule::Corner || crease_edge.is_some() {
+                    return None;
+                }
+                if !(vs == 0.0 || crease::is_infinite(vs)) {
+                    return None;
+                }
+                let _ = (lead, trail);
+            }
+            _ => {
+                // boundary: exactly two sharp (infinite) edges at v, crease rule, and two faces
+                // on this side: the face and its neighbour across the open edge, bounded by a
+                // sharp edge
+                if vs != 0.0
+                    || sharp != 2
+                    || crease_edge.is_some_and(|(ck, _)| ck == k || (ck + 1) % 4 == k)
+                {
+                    return None;
+                }
+                let n = faces.len();
+                let ring_edges = edges.len();
+                // neighbour position in the ring: across the open edge
+                let (nb, far_edge) = if ol {
+                    // lead edge (ring edge ci) is open: neighbour is face ci-1, its far edge is
+                    // ring edge ci-1
+                    if ci == 0 && topo.vert_tags[v].boundary {
+                        return None;
+                    }
+                    let nb = (ci + n - 1) % n;
+                    (nb, edges[nb % ring_edges])
+                } else {
+                    // trail edge (ring edge ci+1) is open: neighbour is face ci+1, its far edge
+                    // is ring edge ci+2
+                    if ci + 1 >= n && topo.vert_tags[v].boundary {
+                        return None;
+                    }
+                    let nb = (ci + 1) % n;
+                    (nb, edges[(ci + 2) % ring_edges])
+                };
+                let _ = nb;
+                if !crease::is_infinite(es(far_edge)) {
+                    return None;
+                }
+            }
+        }
+    }
+    // Gather.
+    let mut grid: [Option<Combo>; 16] = Default::default();
+    for k in 0..4 {
+        grid[at(C[k])] = Some(vec![(fv[k], 1.0)]);
+    }
+    // Rows across each edge.
+    for k in 0..4 {
+        let k1 = (k + 1) % 4;
+        let x = sub(C[k], V[k]);
+        let y = sub(C[k1], V[k]);
+        if open[k] {
+            let e = fe[k];
+            let g = topo
+                .edge_face_list(e)
+                .iter()
+                .copied()
+                .find(|&g| g as usize != f)? as usize;
+            let gv = topo.face_vertices(g);
+            // in g the edge runs v_{k+1} -> v_k
+            let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
+            grid[at(x)] = Some(vec![(gv[(m + 2) % 4], 1.0)]);
+            grid[at(y)] = Some(vec![(gv[(m + 3) % 4], 1.0)]);
+        }
+    }
+    for k in 0..4 {
+        let k1 = (k + 1) % 4;
+        if !open[k] {
+            let x = sub(C[k], V[k]);
+            let y = sub(C[k1], V[k]);
+            grid[at(x)] = Some(reflect(&grid, at(C[k]), at(add(C[k], V[k]))));
+            grid[at(y)] = Some(reflect(&grid, at(C[k1]), at(add(C[k1], V[k]))));
+        }
+    }
+    // Diagonals.
+    for k in 0..4 {
+        let d = sub(sub(C[k], U[k]), V[k]);
+        let (ol, ot) = (open[k], open[(k + 3) % 4]);
+        if ol && ot {
+            let v = fv[k] as usize;
+            let faces = topo.vertex_faces(v);
+            let corners = topo.vertex_face_corners(v);
+            let ci = faces.iter().position(|&g| g as usize == f)?;
+            let oi = (ci + 2) % 4;
+            let g = faces[oi] as usize;
+            let gv = topo.face_vertices(g);
+            grid[at(d)] = Some(vec![(gv[(corners[oi] as usize + 2) % 4], 1.0)]);
+        } else if !ol {
+            // lead edge closed: reflect across it (along V)
+            grid[at(d)] = Some(reflect(
+                &grid,
+                at(add(d, V[k])),
+                at(add(add(d, V[k]), V[k])),
+            ));
+        } else {
+            grid[at(d)] = Some(reflect(
+                &grid,
+                at(add(d, U[k])),
+                at(add(add(d, U[k]), U[k])),
+            ));
+        }
+    }
+    let cps: [Combo; 16] = std::array::from_fn(|i| grid[i].take().unwrap_or_default());
+    let kind = match crease_edge {
+        Some((k, s)) => RegularKind::SingleCrease {
+            edge: k as u8,
+            sharpness: s,
+        },
+        None => RegularKind::BSpline {
+            closed: open.iter().filter(|&&o| !o).count() as u8,
+        },
+    };
+    Some((kind, cps))
+}
