@@ -119,9 +119,7 @@ pub fn classify(
     // Vertex conditions.
     for k in 0..4 {
         let v = fv[k] as usize;
-        if topo.vert_tags[v].nonmanifold {
-            return None;
-        }
+        let nonmanifold = topo.vert_tags[v].nonmanifold;
         let vs = level.vertex_sharpness[v];
         let edges = topo.vertex_edges(v);
         let faces = topo.vertex_faces(v);
@@ -153,8 +151,8 @@ pub fn classify(
             return None;
         }
         let (ol, ot) = (open[k], open[(k + 3) % 4]);
-        let ci = faces.iter().position(|&g| g as usize == f)?;
         match (ol, ot) {
+            _ if nonmanifold && ol == ot => return None,
             (true, true) => {
                 // interior, valence 4, smooth (or the single crease passing through)
                 if vs != 0.0 || edges.len() != 4 || faces.len() != 4 || topo.vert_tags[v].boundary {
@@ -191,27 +189,20 @@ pub fn classify(
                 {
                     return None;
                 }
-                let n = faces.len();
-                let ring_edges = edges.len();
-                // neighbour position in the ring: across the open edge
-                let (nb, far_edge) = if ol {
-                    // lead edge (ring edge ci) is open: neighbour is face ci-1, its far edge is
-                    // ring edge ci-1
-                    if ci == 0 && topo.vert_tags[v].boundary {
-                        return None;
-                    }
-                    let nb = (ci + n - 1) % n;
-                    (nb, edges[nb % ring_edges])
-                } else {
-                    // trail edge (ring edge ci+1) is open: neighbour is face ci+1, its far edge
-                    // is ring edge ci+2
-                    if ci + 1 >= n && topo.vert_tags[v].boundary {
-                        return None;
-                    }
-                    let nb = (ci + 1) % n;
-                    (nb, edges[(ci + 2) % ring_edges])
-                };
-                let _ = nb;
+                // The neighbour across the open edge at v, by face adjacency (this also works
+                // at a crease of non-manifold edges, where the ring is not ordered).
+                let eo = if ol { lead } else { trail };
+                let g = topo
+                    .edge_face_list(eo)
+                    .iter()
+                    .copied()
+                    .find(|&g| g as usize != f)? as usize;
+                let gv = topo.face_vertices(g);
+                let gn = gv.len();
+                let gi = gv.iter().position(|&x| x as usize == v)?;
+                let ge = topo.face_edge_list(g);
+                let (g_lead, g_trail) = (ge[gi], ge[(gi + gn - 1) % gn]);
+                let far_edge = if g_lead == eo { g_trail } else { g_lead };
                 if !crease::is_infinite(es(far_edge)) {
                     return None;
                 }

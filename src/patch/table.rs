@@ -607,11 +607,11 @@ impl PatchTable {
             vertex_limit_frame(&mesh.level, v, &pos, self.method).position
         });
         // At an exact corner the derivative may not exist (extraordinary vertex): take the
-        // exact limit position there, and the derivatives just inside the face.
+        // exact limit position there, and the derivatives 2^-10 of the patch inside the face.
         let at_corner = corner_p.is_some();
         let (mut s, mut t) = (s0, t0);
         if at_corner {
-            let eps = 2f64.powi(-30);
+            let eps = 2f64.powi(-10);
             s = if s0 == 0.0 { eps } else { 1.0 - eps };
             t = if t0 == 0.0 { eps } else { 1.0 - eps };
         }
