@@ -441,3 +441,71 @@ fn refined_cube_matches_hbr_baseline() {
     println!("catmark_cube level 2 vs Hbr: {d1:.2e} {d2:.2e} of the diagonal");
     assert!(d1 <= 1e-6 && d2 <= 1e-6, "{d1:e} {d2:e}");
 }
+
+#[test]
+fn eval_and_stats_through_the_cli() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = std::env::temp_dir().join(format!("limitray-cli-eval-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("cube.obj");
+    std::fs::write(
+        &obj,
+        "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 -1\nv 1 -1 -1\n\
+         f 1 2 4 3\nf 3 4 6 5\nf 5 6 8 7\nf 7 8 2 1\nf 2 8 6 4\nf 7 1 3 5\nt crease 2/1 0 1 3\n",
+    )
+    .unwrap();
+    let bin = env!("CARGO_BIN_EXE_limitray");
+    let mut child = Command::new(bin)
+        .arg("eval")
+        .arg(&obj)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"0 0.5 0.5\n0 0 0.25 0.75\nbad line\n9 0.5 0.5\n0 1 0.5 0.5\n1 0 0\n")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 6, "one output line per input line: {stdout}");
+    for (i, l) in lines.iter().enumerate() {
+        let fields: Vec<&str> = l.split_whitespace().collect();
+        assert_eq!(fields.len(), 9);
+        let bad = (2..=4).contains(&i);
+        assert_eq!(fields.iter().all(|f| *f == "nan"), bad, "line {i}: {l}");
+        if !bad {
+            assert!(fields.iter().all(|f| f.parse::<f64>().unwrap().is_finite()));
+        }
+    }
+    // messages name the input lines; exit code 2 at the end
+    assert!(
+        stderr.contains("stdin:3:") && stderr.contains("stdin:4:") && stderr.contains("stdin:5:"),
+        "{stderr}"
+    );
+    assert_eq!(out.status.code(), Some(2));
+    // the top face is mirror-symmetric in x (the crease runs along x at y = -1): its centre
+    // lies on x = 0, pulled towards the crease (y < 0)
+    let c: Vec<f64> = lines[0]
+        .split_whitespace()
+        .map(|f| f.parse().unwrap())
+        .collect();
+    assert!(c[0].abs() < 1e-12 && c[1] < 0.0 && c[2] > 0.0, "{c:?}");
+
+    let out = Command::new(bin).arg("stats").arg(&obj).output().unwrap();
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["patches_total"].as_u64().unwrap() > 6);
+    assert!(v["bytes_total"].as_u64().unwrap() > 0);
+    assert!(
+        v["patches_by_type"]["single_crease"].as_u64().is_some()
+            || v["patches_by_type"]["regular"].as_u64().is_some()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

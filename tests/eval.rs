@@ -199,3 +199,47 @@ fn repose_without_reanalysis() {
     ];
     assert!(common::dist(&after, &expect) < 1e-12);
 }
+
+#[test]
+fn patches_tile_their_faces_and_know_their_domain() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    for name in [
+        "catmark_car",
+        "catmark_nonquads",
+        "catmark_hole_test1",
+        "catmark_pole8",
+    ] {
+        let mesh = read_obj(&models.join(format!("opensubdiv/{name}.obj"))).unwrap();
+        let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        let mut area = std::collections::HashMap::new();
+        for p in &table.patches {
+            let h2 = p.axis_u[0] * p.axis_u[0] + p.axis_u[1] * p.axis_u[1];
+            assert_eq!(h2, p.axis_v[0] * p.axis_v[0] + p.axis_v[1] * p.axis_v[1]);
+            assert_eq!(
+                h2,
+                0.25f64.powi(
+                    p.level as i32
+                        - if table.sub_faces(p.face as usize) > 1 {
+                            1
+                        } else {
+                            0
+                        }
+                )
+            );
+            *area.entry((p.face, p.sub_face)).or_insert(0.0) += h2;
+            // the centre of the patch's domain evaluates to a point of that level
+            let u = p.origin[0] + 0.5 * (p.axis_u[0] + p.axis_v[0]);
+            let v = p.origin[1] + 0.5 * (p.axis_u[1] + p.axis_v[1]);
+            let s = table
+                .eval(p.face as usize, p.sub_face as usize, u, v)
+                .unwrap();
+            assert!(s.level >= p.level);
+        }
+        for ((f, _), a) in area {
+            // holes have no patches; every other (sub-)face is covered exactly once
+            assert!((a - 1.0f64).abs() < 1e-12, "{name}: face {f} covered {a}");
+        }
+    }
+}

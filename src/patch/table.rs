@@ -84,6 +84,33 @@ pub struct Patch {
     pub end_cap: u32,
     /// For end caps: the face within the cut-out.
     pub cap_face: u32,
+    /// Base face.
+    pub face: u32,
+    /// Sub-face of the base face (0 for quads).
+    pub sub_face: u8,
+    /// Domain in the (sub-)face's parameters: `(u, v) = origin + s·axis_u + t·axis_v` for the
+    /// patch's own `(s, t) ∈ [0, 1]²`.
+    pub origin: [f64; 2],
+    /// See `origin`.
+    pub axis_u: [f64; 2],
+    /// See `origin`.
+    pub axis_v: [f64; 2],
+}
+
+impl Patch {
+    /// Placeholder for the fields filled in when a patch is attached to its node.
+    const UNSET: Patch = Patch {
+        kind: PatchKind::EndCap,
+        level: 0,
+        first_point: 0,
+        end_cap: 0,
+        cap_face: 0,
+        face: 0,
+        sub_face: 0,
+        origin: [0.0; 2],
+        axis_u: [1.0, 0.0],
+        axis_v: [0.0, 1.0],
+    };
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -116,6 +143,8 @@ pub struct PatchTable {
     /// Leaf patches.
     pub patches: Vec<Patch>,
     nodes: Vec<Node>,
+    /// Base face, sub-face and domain of each node.
+    node_info: Vec<(u32, u8, Frame)>,
     /// Inner nodes' children (4 each, in quadrant order).
     children: Vec<[u32; 4]>,
     /// Root node of sub-face `k` of face `f` at `roots[root_offsets[f] + k]`.
@@ -251,7 +280,13 @@ fn patch_kind(kind: RegularKind) -> PatchKind {
 }
 
 impl PatchTable {
-    fn add_leaf(&mut self, slot: u32, patch: Patch) {
+    fn add_leaf(&mut self, slot: u32, mut patch: Patch) {
+        let (face, sub, fr) = self.node_info[slot as usize];
+        patch.face = face;
+        patch.sub_face = sub;
+        patch.origin = fr.o;
+        patch.axis_u = fr.a;
+        patch.axis_v = fr.b;
         *self
             .stats
             .by_kind_level
@@ -261,7 +296,8 @@ impl PatchTable {
         self.nodes[slot as usize] = Node::Leaf((self.patches.len() - 1) as u32);
     }
 
-    fn new_node(&mut self) -> u32 {
+    fn new_node(&mut self, face: u32, sub: u8, frame: Frame) -> u32 {
+        self.node_info.push((face, sub, frame));
         self.nodes.push(Node::Empty);
         (self.nodes.len() - 1) as u32
     }
@@ -299,6 +335,7 @@ impl PatchTable {
                     first_point: first,
                     end_cap: 0,
                     cap_face: 0,
+                    ..Patch::UNSET
                 },
             );
             return None;
@@ -328,6 +365,7 @@ impl PatchTable {
         let mut table = PatchTable {
             patches: Vec::new(),
             nodes: Vec::new(),
+            node_info: Vec::new(),
             children: Vec::new(),
             roots: Vec::new(),
             root_offsets: vec![0],
@@ -343,15 +381,15 @@ impl PatchTable {
         for f in 0..base.num_faces() {
             let n = base.topo.face_size(f);
             if n == 4 {
-                let slot = table.new_node();
+                let slot = table.new_node(f as u32, 0, Frame::UNIT);
                 table.roots.push(slot);
                 if let Some(p) = table.settle(&base, 0, f, slot, 0) {
                     pending.push(p);
                 }
             } else {
                 let first = table.nodes.len() as u32;
-                for _ in 0..n {
-                    let slot = table.new_node();
+                for k in 0..n {
+                    let slot = table.new_node(f as u32, k as u8, Frame::UNIT);
                     table.roots.push(slot);
                 }
                 if !base.face_hole[f] {
@@ -382,12 +420,9 @@ impl PatchTable {
                     Slot::Cap(_) => unreachable!("end caps are settled at their level"),
                     Slot::NGon(first, n) => (first..first + n).collect(),
                     Slot::Quad(node) => {
-                        let kids = [
-                            table.new_node(),
-                            table.new_node(),
-                            table.new_node(),
-                            table.new_node(),
-                        ];
+                        let (face, sub, fr) = table.node_info[node as usize];
+                        let kids: [u32; 4] =
+                            std::array::from_fn(|q| table.new_node(face, sub, fr.child(q)));
                         table.children.push(kids);
                         table.nodes[node as usize] = Node::Inner((table.children.len() - 1) as u32);
                         kids.to_vec()
@@ -427,6 +462,7 @@ impl PatchTable {
                             first_point: first,
                             end_cap: cap,
                             cap_face: face,
+                            ..Patch::UNSET
                         },
                     );
                 }
@@ -554,6 +590,15 @@ impl PatchTable {
                 }
             }
         }
+    }
+
+    /// Evaluates many samples `(face, k, u, v)` in parallel.
+    pub fn eval_batch(&self, samples: &[(usize, usize, f64, f64)]) -> Vec<Result<Sample>> {
+        use rayon::prelude::*;
+        samples
+            .par_iter()
+            .map(|&(f, k, u, v)| self.eval(f, k, u, v))
+            .collect()
     }
 
     fn grid(&self, first: u32) -> ControlGrid {
