@@ -110,6 +110,20 @@ enum Command {
         #[arg(long)]
         sharpness: Option<f32>,
     },
+    /// Benchmark patch-table build and random evaluations (JSON line on stdout).
+    BenchEval {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        /// Random samples per repetition.
+        #[arg(long, default_value_t = 100_000)]
+        samples: usize,
+        /// Worker threads (0: all available).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        /// Random seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Benchmark table building and application (JSON line on stdout).
     BenchRefine(limitray::bench::RefineBenchArgs),
 }
@@ -228,6 +242,22 @@ fn run(cli: Cli) -> Result<(), Error> {
                 "{}",
                 limitray::info::patch_stats(&mesh.display().to_string(), &table, ms)
             );
+            Ok(())
+        }
+        Command::BenchEval {
+            mesh,
+            samples,
+            threads,
+            seed,
+        } => {
+            let m = load(&mesh)?;
+            let threads = if threads == 0 {
+                std::thread::available_parallelism().map_or(1, |n| n.get())
+            } else {
+                threads
+            };
+            let v = limitray::bench::eval_bench(&m, samples, threads, seed)?;
+            println!("{v}");
             Ok(())
         }
         Command::BenchRefine(args) => {
