@@ -32,15 +32,7 @@ fn every_catmark_model_loads_refines_and_has_finite_limits() {
     let Some(models) = common::shared_models() else {
         return;
     };
-    let mut files: Vec<_> = std::fs::read_dir(models.join("opensubdiv"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            let name = p.file_name().unwrap().to_str().unwrap();
-            name.starts_with("catmark_") && name.ends_with(".obj")
-        })
-        .collect();
-    files.sort();
+    let files = common::catmark_files(&models);
     assert!(
         files.len() >= 80,
         "expected the 87 catmark models, found {}",

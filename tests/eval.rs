@@ -86,18 +86,7 @@ fn eval_equals_exact_limit_at_dyadic_points_on_corpus() {
     let Some(models) = common::shared_models() else {
         return;
     };
-    let mut files: Vec<_> = std::fs::read_dir(models.join("opensubdiv"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            p.file_name()
-                .unwrap()
-                .to_str()
-                .unwrap()
-                .starts_with("catmark_")
-        })
-        .collect();
-    files.sort();
+    let files = common::catmark_files(&models);
     let mut failures = Vec::new();
     let mut n = 0;
     for p in &files {

@@ -39,12 +39,8 @@ fn limit_is_invariant_under_refinement_on_corpus() {
         return;
     };
     let mut n = 0;
-    for entry in std::fs::read_dir(models.join("opensubdiv")).unwrap() {
-        let p = entry.unwrap().path();
+    for p in common::catmark_files(&models) {
         let name = p.file_name().unwrap().to_str().unwrap().to_string();
-        if !name.starts_with("catmark_") {
-            continue;
-        }
         let Ok(mesh) = read_obj(&p) else { continue };
         if mesh.num_faces() > 2000 {
             continue;
@@ -58,35 +54,9 @@ fn limit_is_invariant_under_refinement_on_corpus() {
 }
 
 fn cube(sharp: Option<f32>) -> ControlMesh {
-    let p = vec![
-        [-1.0, -1.0, 1.0],
-        [1.0, -1.0, 1.0],
-        [-1.0, 1.0, 1.0],
-        [1.0, 1.0, 1.0],
-        [-1.0, 1.0, -1.0],
-        [1.0, 1.0, -1.0],
-        [-1.0, -1.0, -1.0],
-        [1.0, -1.0, -1.0],
-    ];
-    let f = [
-        0, 1, 3, 2, 2, 3, 5, 4, 4, 5, 7, 6, 6, 7, 1, 0, 1, 7, 5, 3, 6, 0, 2, 4,
-    ];
-    let mut b = MeshBuilder::new().positions(p).faces(&[4; 6], &f);
+    let mut b = common::cube_builder();
     if let Some(s) = sharp {
-        for (a, c) in [
-            (0, 1),
-            (1, 3),
-            (3, 2),
-            (2, 0),
-            (4, 5),
-            (5, 7),
-            (7, 6),
-            (6, 4),
-            (0, 6),
-            (1, 7),
-            (2, 4),
-            (3, 5),
-        ] {
+        for (a, c) in common::CUBE_EDGES {
             b = b.crease(a, c, s);
         }
     }

@@ -75,18 +75,7 @@ fn refinement_matches_opensubdiv_far_on_corpus() {
     };
     let tmp = std::env::temp_dir().join(format!("limitray-osd-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
-    let mut files: Vec<PathBuf> = std::fs::read_dir(models.join("opensubdiv"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            p.file_name()
-                .unwrap()
-                .to_str()
-                .unwrap()
-                .starts_with("catmark_")
-        })
-        .collect();
-    files.sort();
+    let files = common::catmark_files(&models);
     let mut failures = Vec::new();
     let mut compared = 0;
     for path in &files {

@@ -6,39 +6,10 @@ mod common;
 use limitray::mesh::{BoundaryInterpolation, ControlMesh, MeshBuilder, Options};
 use limitray::refine::{step, Refiner};
 
-const CUBE_FACES: [u32; 24] = [
-    0, 1, 3, 2, 2, 3, 5, 4, 4, 5, 7, 6, 6, 7, 1, 0, 1, 7, 5, 3, 6, 0, 2, 4,
-];
-const CUBE_EDGES: [(u32, u32); 12] = [
-    (0, 1),
-    (1, 3),
-    (3, 2),
-    (2, 0),
-    (4, 5),
-    (5, 7),
-    (7, 6),
-    (6, 4),
-    (0, 6),
-    (1, 7),
-    (2, 4),
-    (3, 5),
-];
+use common::{cube_builder, CUBE_EDGES};
+
 /// The loop of the cube's top face (z = +1).
 const TOP_LOOP: [u32; 4] = [0, 1, 3, 2];
-
-fn cube_builder() -> MeshBuilder {
-    let p = vec![
-        [-1.0, -1.0, 1.0],
-        [1.0, -1.0, 1.0],
-        [-1.0, 1.0, 1.0],
-        [1.0, 1.0, 1.0],
-        [-1.0, 1.0, -1.0],
-        [1.0, 1.0, -1.0],
-        [-1.0, -1.0, -1.0],
-        [1.0, -1.0, -1.0],
-    ];
-    MeshBuilder::new().positions(p).faces(&[4; 6], &CUBE_FACES)
-}
 
 fn cube_with_top_loop(s: f32) -> ControlMesh {
     let mut b = cube_builder();

@@ -177,7 +177,6 @@ pub fn classify(
                 if !(vs == 0.0 || crease::is_infinite(vs)) {
                     return None;
                 }
-                let _ = (lead, trail);
             }
             _ => {
                 // boundary: exactly two sharp (infinite) edges at v, crease rule, and two faces

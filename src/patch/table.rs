@@ -320,12 +320,8 @@ impl PatchTable {
         if let Some((kind, cps)) = classify(level, g, self.options.single_crease) {
             let first = self.point_stencils.len() as u32;
             for c in &cps {
-                for &(v, w) in c {
-                    self.point_stencils.indices.push(offset + v);
-                    self.point_stencils.weights.push(w);
-                }
-                let n = self.point_stencils.indices.len() as u32;
-                self.point_stencils.offsets.push(n);
+                let terms: Vec<(u32, f64)> = c.iter().map(|&(v, w)| (offset + v, w)).collect();
+                self.point_stencils.push_terms(&terms);
             }
             self.add_leaf(
                 slot,
@@ -400,7 +396,6 @@ impl PatchTable {
         }
         // Refine what is irregular, level by level, on the union of two-ring neighbourhoods.
         let mut level = base;
-        let mut offset = 0u32; // global index of the current level's first vertex
         let mut total = nb as u32;
         let mut depth = 0;
         while !pending.is_empty() {
@@ -443,10 +438,7 @@ impl PatchTable {
                 let (cut, old, new_faces) = extract_faces(&child, &faces, 2);
                 let first = table.point_stencils.len() as u32;
                 for &v in &old {
-                    table.point_stencils.indices.push(child_offset + v);
-                    table.point_stencils.weights.push(1.0);
-                    let n = table.point_stencils.indices.len() as u32;
-                    table.point_stencils.offsets.push(n);
+                    table.point_stencils.push_terms(&[(child_offset + v, 1.0)]);
                 }
                 table.end_caps.push(CapMesh {
                     level: cut,
@@ -468,10 +460,8 @@ impl PatchTable {
                 }
             }
             level = child;
-            offset = child_offset;
             pending = next;
         }
-        let _ = offset;
         table.point_stencils.num_inputs = total as usize;
         table.set_positions(&mesh.positions);
         Ok(table)

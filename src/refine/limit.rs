@@ -349,12 +349,17 @@ fn vertex_limit_masks(level: &Level, v: usize, method: CreaseMethod) -> [Vec<(u3
     let rule = crease::vertex_rule(ring.vertex_sharpness, sharp.len());
     let (_, s_rows) = ring.subdivide(method);
     let size = s_rows.len();
-    let s = dense(&s_rows, size);
     let pos_local = dominant_left(&s_rows, size);
     let (du_local, dv_local) = match rule {
         Rule::Smooth if sharp.is_empty() && ne >= 3 => smooth_tangents(ne),
-        Rule::Smooth => subspace_tangents(&s, ne),
-        Rule::Crease => crease_tangents(&s, ne, ring.faces.len(), sharp[0], sharp[1]),
+        Rule::Smooth => subspace_tangents(&dense(&s_rows, size), ne),
+        Rule::Crease => crease_tangents(
+            &dense(&s_rows, size),
+            ne,
+            ring.faces.len(),
+            sharp[0],
+            sharp[1],
+        ),
         Rule::Corner => {
             let mut du = vec![0.0; size];
             let mut dv = vec![0.0; size];

@@ -97,81 +97,12 @@ impl StencilTable {
             .extend(other.offsets[1..].iter().map(|&o| o + base));
     }
 
-    /// The table made of rows `rows` of this one, in that order.
-    pub fn select(&self, rows: &[u32]) -> StencilTable {
-        let mut t = StencilTable::new(self.num_inputs);
-        for &r in rows {
-            let (idx, w) = self.row(r as usize);
-            t.indices.extend_from_slice(idx);
-            t.weights.extend_from_slice(w);
-            t.offsets.push(t.indices.len() as u32);
+    /// Appends a row given as `(input, weight)` terms (taken as they are).
+    pub fn push_terms(&mut self, terms: &[(u32, f64)]) {
+        for &(i, w) in terms {
+            self.indices.push(i);
+            self.weights.push(w);
         }
-        t
-    }
-
-    /// The product `self ∘ inner`: rows of `self` read the outputs of `inner`; the result reads
-    /// `inner`'s inputs.
-    pub fn compose(&self, inner: &StencilTable) -> StencilTable {
-        let mut t = StencilTable::new(inner.num_inputs);
-        let mut dense = vec![0.0f64; inner.num_inputs];
-        let mut touched: Vec<u32> = Vec::new();
-        for r in 0..self.len() {
-            let (idx, w) = self.row(r);
-            for (&i, &wi) in idx.iter().zip(w) {
-                let (jdx, wj) = inner.row(i as usize);
-                for (&j, &wjj) in jdx.iter().zip(wj) {
-                    if dense[j as usize] == 0.0 {
-                        touched.push(j);
-                    }
-                    dense[j as usize] += wi * wjj;
-                }
-            }
-            touched.sort_unstable();
-            touched.dedup();
-            for &j in &touched {
-                let x = dense[j as usize];
-                if x != 0.0 {
-                    t.indices.push(j);
-                    t.weights.push(x);
-                }
-                dense[j as usize] = 0.0;
-            }
-            touched.clear();
-            t.offsets.push(t.indices.len() as u32);
-        }
-        t
-    }
-
-    /// Appends one row: the combination `Σ w · inner.row(i)` over the `(i, w)` of `combo`.
-    pub fn push_combination(
-        &mut self,
-        inner: &StencilTable,
-        combo: &[(u32, f64)],
-        scratch: &mut Scratch,
-    ) {
-        if scratch.dense.len() < inner.num_inputs {
-            scratch.dense.resize(inner.num_inputs, 0.0);
-        }
-        for &(i, wi) in combo {
-            let (jdx, wj) = inner.row(i as usize);
-            for (&j, &w) in jdx.iter().zip(wj) {
-                if scratch.dense[j as usize] == 0.0 {
-                    scratch.touched.push(j);
-                }
-                scratch.dense[j as usize] += wi * w;
-            }
-        }
-        scratch.touched.sort_unstable();
-        scratch.touched.dedup();
-        for &j in &scratch.touched {
-            let x = scratch.dense[j as usize];
-            if x != 0.0 {
-                self.indices.push(j);
-                self.weights.push(x);
-            }
-            scratch.dense[j as usize] = 0.0;
-        }
-        scratch.touched.clear();
         self.offsets.push(self.indices.len() as u32);
     }
 
@@ -243,13 +174,6 @@ impl StencilTable {
         let out = self.apply(flat, 3);
         out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
     }
-}
-
-/// Dense scratch space for combining long stencil rows.
-#[derive(Clone, Debug, Default)]
-pub struct Scratch {
-    dense: Vec<f64>,
-    touched: Vec<u32>,
 }
 
 /// Collects the weighted terms of one stencil row, merging repeated inputs. Rows are short

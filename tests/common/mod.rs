@@ -65,3 +65,55 @@ pub fn max_nearest_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 pub fn dist(p: &[f64; 3], q: &[f64; 3]) -> f64 {
     ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
 }
+
+/// The Catmull-Clark shapes of the OpenSubdiv corpus (`catmark_*.obj`), sorted by name.
+pub fn catmark_files(models: &std::path::Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(models.join("opensubdiv"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_str().unwrap();
+            name.starts_with("catmark_") && name.ends_with(".obj")
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// Faces of the test cube (side 2, centred at the origin), counter-clockwise from outside.
+pub const CUBE_FACES: [u32; 24] = [
+    0, 1, 3, 2, 2, 3, 5, 4, 4, 5, 7, 6, 6, 7, 1, 0, 1, 7, 5, 3, 6, 0, 2, 4,
+];
+
+/// The twelve edges of the test cube.
+pub const CUBE_EDGES: [(u32, u32); 12] = [
+    (0, 1),
+    (1, 3),
+    (3, 2),
+    (2, 0),
+    (4, 5),
+    (5, 7),
+    (7, 6),
+    (6, 4),
+    (0, 6),
+    (1, 7),
+    (2, 4),
+    (3, 5),
+];
+
+/// A builder holding the test cube, to add tags to.
+pub fn cube_builder() -> limitray::mesh::MeshBuilder {
+    let p = vec![
+        [-1.0, -1.0, 1.0],
+        [1.0, -1.0, 1.0],
+        [-1.0, 1.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [-1.0, 1.0, -1.0],
+        [1.0, 1.0, -1.0],
+        [-1.0, -1.0, -1.0],
+        [1.0, -1.0, -1.0],
+    ];
+    limitray::mesh::MeshBuilder::new()
+        .positions(p)
+        .faces(&[4; 6], &CUBE_FACES)
+}
