@@ -11,11 +11,13 @@
 pub mod bench;
 pub mod bvh;
 pub mod cli_eval;
+pub mod cli_trace;
 pub mod dice;
 pub mod error;
 pub mod info;
 pub mod mesh;
 pub mod patch;
+pub mod probe;
 pub mod refine;
 
 pub use error::{Error, ErrorKind, Result};
