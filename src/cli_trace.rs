@@ -116,7 +116,19 @@ pub fn trace(
     table: &PatchTable,
     exact: bool,
     input: impl BufRead,
+    output: impl Write,
+) -> Result<()> {
+    trace_with(table, exact, input, output, |rays| Ok(bvh.intersect_batch(rays)))
+}
+
+/// [`trace`] with the closest hits of the parsed rays computed by `hits` (one result per ray,
+/// in order): the GPU backend plugs in here.
+pub fn trace_with(
+    table: &PatchTable,
+    exact: bool,
+    input: impl BufRead,
     mut output: impl Write,
+    hits: impl FnOnce(&[Ray]) -> Result<Vec<Option<crate::bvh::Hit>>>,
 ) -> Result<()> {
     let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
     let mut lines = Vec::new();
@@ -131,7 +143,7 @@ pub fn trace(
         .iter()
         .filter_map(|p| p.as_ref().and_then(|r| r.as_ref().ok()).copied())
         .collect();
-    let hits = bvh.intersect_batch(&rays);
+    let hits = hits(&rays)?;
     let mut next = hits.into_iter().zip(rays.iter());
     let mut bad = 0;
     for (i, p) in parsed.iter().enumerate() {

@@ -14,6 +14,9 @@ pub enum ErrorKind {
     Topology,
     /// A caller asked for something the library does not offer (options, levels).
     Usage,
+    /// The GPU backend failed: no Vulkan adapter, a device or kernel error, a traversal bound
+    /// exceeded.
+    Gpu,
 }
 
 /// An error with the location of the offending element, printed as

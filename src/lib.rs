@@ -14,6 +14,7 @@ pub mod cli_eval;
 pub mod cli_trace;
 pub mod dice;
 pub mod error;
+pub mod gpu;
 pub mod info;
 pub mod mesh;
 pub mod patch;

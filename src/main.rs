@@ -149,7 +149,13 @@ enum Command {
         /// Refine each hit onto the exact limit surface (Newton, f64).
         #[arg(long)]
         exact: bool,
+        #[command(flatten)]
+        gpu: limitray::gpu::cli::BackendArgs,
     },
+    /// List the Vulkan adapters of the GPU backend (the automatic choice first).
+    GpuInfo,
+    /// Benchmark primary-hit rays/s on the CPU and the GPU (JSON line on stdout).
+    BenchGpu(limitray::gpu::cli::BenchGpuArgs),
     /// Benchmark dicing, BVH build and ray queries (JSON line on stdout).
     BenchTrace(limitray::cli_trace::TraceBenchArgs),
     /// Accuracy of diced hits against the exact limit surface, per rate (JSON lines).
@@ -336,17 +342,27 @@ fn run(cli: Cli) -> Result<(), Error> {
             rules,
             dice,
             exact,
+            gpu,
         } => {
             let m = load(&mesh)?;
             let (table, d) = limitray::cli_trace::dice_mesh(&m, rules.options(&m), &dice)?;
             let bvh = limitray::bvh::MeshBvh::build(d);
-            limitray::cli_trace::trace(
+            limitray::gpu::cli::trace(
                 &bvh,
                 &table,
                 exact,
+                &gpu,
                 std::io::stdin().lock(),
                 std::io::stdout().lock(),
             )
+        }
+        Command::GpuInfo => {
+            print!("{}", limitray::gpu::cli::gpu_info()?);
+            Ok(())
+        }
+        Command::BenchGpu(args) => {
+            println!("{}", limitray::gpu::cli::bench_gpu(&args)?);
+            Ok(())
         }
         Command::BenchTrace(args) => {
             println!("{}", limitray::cli_trace::trace_bench(&args)?);

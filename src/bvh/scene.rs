@@ -26,9 +26,9 @@ pub struct SceneHit {
 }
 
 #[derive(Clone, Debug)]
-struct Instance {
-    mesh: u32,
-    world_to_object: Affine3A,
+pub(crate) struct Instance {
+    pub(crate) mesh: u32,
+    pub(crate) world_to_object: Affine3A,
     normal_matrix: Mat3A,
     bounds: ([f32; 3], [f32; 3]),
 }
@@ -36,11 +36,11 @@ struct Instance {
 /// Instances of diced meshes.
 #[derive(Clone, Debug, Default)]
 pub struct SceneBvh {
-    meshes: Vec<Arc<MeshBvh>>,
-    instances: Vec<Instance>,
-    top: CwBvh,
+    pub(crate) meshes: Vec<Arc<MeshBvh>>,
+    pub(crate) instances: Vec<Instance>,
+    pub(crate) top: CwBvh,
     /// Instance of each top-level leaf slot.
-    top_index: Vec<u32>,
+    pub(crate) top_index: Vec<u32>,
 }
 
 struct InstBox(([f32; 3], [f32; 3]));
@@ -241,6 +241,17 @@ impl SceneBvh {
             (tmax, false)
         });
         hit
+    }
+
+    /// The hit record of leaf triangle `leaf` of instance `instance` at `t` with barycentrics
+    /// `b1, b2`: what [`Self::intersect`] returns for that triangle (the GPU backend's hits are
+    /// completed with it).
+    pub fn hit_record(&self, instance: u32, leaf: usize, t: f32, b1: f32, b2: f32) -> SceneHit {
+        let inst = &self.instances[instance as usize];
+        let mut h = self.meshes[inst.mesh as usize].hit(leaf, t, b1, b2);
+        h.ng = self.to_world_normal(inst, h.ng);
+        h.ns = self.to_world_normal(inst, h.ns);
+        SceneHit { hit: h, instance }
     }
 
     fn to_world_normal(&self, inst: &Instance, n: [f32; 3]) -> [f32; 3] {

@@ -1,0 +1,448 @@
+// Ray queries on the GPU: the same obvhs CWBVH, the same conservative box test and the same
+// watertight triangle test as the CPU (src/bvh/{mesh,scene,triangle}.rs), operation for
+// operation in the same order and without fused multiply-add, so that on an IEEE device whose
+// + − × ÷ round like Rust's f32 (lavapipe does) every hit is bitwise the CPU's.
+//
+// Needs exact.wgsl (edge_exact) before it. The including kernel declares nothing of its own
+// in group 0 bindings 0..=8.
+//
+// Geometry lives in one space of u32 words split over GEO_CHUNKS storage bindings of
+// 2^chunk_shift words each (a large scene exceeds one binding): word i is word
+// i & (2^shift − 1) of chunk i >> shift.
+//
+// Words of the space (offsets in `Params`):
+//   mesh records  4 words each: node offset, node count, vertex offset, triangle count
+//   nodes         20 words per obvhs CwBvhNode (its 80 bytes, bytemuck)
+//   vertices      9 words per leaf-ordered triangle (three corners, f32 bits)
+//   top nodes     the top-level CWBVH (scene mode)
+//   top index     1 word per top-level leaf slot: the instance
+//   instances     16 words: mesh, 3 unused, then world-to-object x_axis, y_axis, z_axis,
+//                 translation (f32 bits, glam's Affine3A columns)
+
+struct Params {
+    chunk_shift: u32,
+    // 0: a single mesh (mesh record 0, no transform); 1: a scene of instances.
+    mode: u32,
+    mesh_off: u32,
+    top_node_off: u32,
+    top_node_count: u32,
+    top_index_off: u32,
+    inst_off: u32,
+    // Rays in this dispatch.
+    ray_count: u32,
+    // Loop iterations allowed per ray (all levels together) before it reports overflow.
+    max_iter: u32,
+    // 1 + 2γ(3), as the CPU computes it in f32.
+    box_scale: f32,
+    // Kernel-specific.
+    user0: u32,
+    user1: u32,
+}
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<storage, read> g0: array<u32>;
+@group(0) @binding(2) var<storage, read> g1: array<u32>;
+@group(0) @binding(3) var<storage, read> g2: array<u32>;
+@group(0) @binding(4) var<storage, read> g3: array<u32>;
+@group(0) @binding(5) var<storage, read> g4: array<u32>;
+@group(0) @binding(6) var<storage, read> g5: array<u32>;
+@group(0) @binding(7) var<storage, read> g6: array<u32>;
+@group(0) @binding(8) var<storage, read> g7: array<u32>;
+
+fn gw(i: u32) -> u32 {
+    let c = i >> P.chunk_shift;
+    let o = i & ((1u << P.chunk_shift) - 1u);
+    switch c {
+        case 0u: { return g0[o]; }
+        case 1u: { return g1[o]; }
+        case 2u: { return g2[o]; }
+        case 3u: { return g3[o]; }
+        case 4u: { return g4[o]; }
+        case 5u: { return g5[o]; }
+        case 6u: { return g6[o]; }
+        default: { return g7[o]; }
+    }
+}
+
+fn gf(i: u32) -> f32 {
+    return bitcast<f32>(gw(i));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Prepared rays (PreparedRay::new).
+
+struct PRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    k: vec3<u32>,
+    s: vec3<f32>,
+    tmin: f32,
+    tmax: f32,
+    oct_inv4: u32,
+    ok: bool,
+}
+
+fn finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+fn sign_negative(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x80000000u) != 0u;
+}
+
+fn prepare_ray(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> PRay {
+    var r: PRay;
+    r.ok = finite(d.x) && finite(d.y) && finite(d.z) && !(d.x == 0.0 && d.y == 0.0 && d.z == 0.0)
+        && finite(o.x) && finite(o.y) && finite(o.z);
+    let a = abs(d);
+    var kz = 2u;
+    if (a.x > a.y) {
+        if (a.x > a.z) {
+            kz = 0u;
+        }
+    } else if (a.y > a.z) {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    var dv = d;
+    if (dv[kz] < 0.0) {
+        let t = kx;
+        kx = ky;
+        ky = t;
+    }
+    r.o = o;
+    r.d = d;
+    r.inv = vec3<f32>(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+    r.k = vec3<u32>(kx, ky, kz);
+    let dkz = dv[kz];
+    r.s = vec3<f32>(dv[kx] / dkz, dv[ky] / dkz, 1.0 / dkz);
+    r.tmin = tmin;
+    r.tmax = tmax;
+    // obvhs's ray_get_octant_inv4.
+    r.oct_inv4 = select(0x04040404u, 0u, d.x < 0.0) | select(0x02020202u, 0u, d.y < 0.0)
+        | select(0x01010101u, 0u, d.z < 0.0);
+    return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The watertight triangle test (intersect_prepared).
+
+struct TriHit {
+    hit: bool,
+    t: f32,
+    b1: f32,
+    b2: f32,
+}
+
+fn intersect_triangle(r: PRay, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, tmax: f32) -> TriHit {
+    var out = TriHit(false, 0.0, 0.0, 0.0);
+    let kx = r.k.x;
+    let ky = r.k.y;
+    let kz = r.k.z;
+    var at = vec3<f32>(a.x - r.o.x, a.y - r.o.y, a.z - r.o.z);
+    var bt = vec3<f32>(b.x - r.o.x, b.y - r.o.y, b.z - r.o.z);
+    var ct = vec3<f32>(c.x - r.o.x, c.y - r.o.y, c.z - r.o.z);
+    let ax = at[kx] - r.s.x * at[kz];
+    let ay = at[ky] - r.s.y * at[kz];
+    let bx = bt[kx] - r.s.x * bt[kz];
+    let by = bt[ky] - r.s.y * bt[kz];
+    let cx = ct[kx] - r.s.x * ct[kz];
+    let cy = ct[ky] - r.s.y * ct[kz];
+    var u = cx * by - cy * bx;
+    var v = ax * cy - ay * cx;
+    var w = bx * ay - by * ax;
+    if (u == 0.0 || v == 0.0 || w == 0.0) {
+        u = edge_exact(cx, by, cy, bx);
+        v = edge_exact(ax, cy, ay, cx);
+        w = edge_exact(bx, ay, by, ax);
+    }
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return out;
+    }
+    let det = (u + v) + w;
+    if (det == 0.0) {
+        return out;
+    }
+    let az = r.s.z * at[kz];
+    let bz = r.s.z * bt[kz];
+    let cz = r.s.z * ct[kz];
+    let t_scaled = (u * az + v * bz) + w * cz;
+    var ts = t_scaled;
+    var ad = det;
+    if (det < 0.0) {
+        ts = -t_scaled;
+        ad = -det;
+    }
+    if (ts < r.tmin * ad || ts > tmax * ad) {
+        return out;
+    }
+    let rcp = 1.0 / det;
+    let t = t_scaled * rcp;
+    if (t < r.tmin || t > tmax) {
+        return out;
+    }
+    out.hit = true;
+    out.t = t;
+    out.b1 = v * rcp;
+    out.b2 = w * rcp;
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// CWBVH nodes (obvhs's CwBvhNode, 20 words) and the node test (node_hitmask).
+
+fn byte_of(lo: u32, hi: u32, c: u32) -> u32 {
+    let w = select(lo, hi, c >= 4u);
+    return (w >> ((c & 3u) * 8u)) & 0xffu;
+}
+
+// The conservative slab test of child c: exactly PreparedRay::hits_box over child_box, with
+// the max/min of the SSE version (a NaN distance keeps the bound).
+fn node_hitmask(n: u32, r: PRay, tmax: f32) -> u32 {
+    let p = vec3<f32>(gf(n), gf(n + 1u), gf(n + 2u));
+    let w3 = gw(n + 3u);
+    let e = vec3<f32>(
+        bitcast<f32>((w3 & 0xffu) << 23u),
+        bitcast<f32>(((w3 >> 8u) & 0xffu) << 23u),
+        bitcast<f32>(((w3 >> 16u) & 0xffu) << 23u),
+    );
+    let meta_lo = gw(n + 6u);
+    let meta_hi = gw(n + 7u);
+    // get_child_and_index_bits, one 32-bit half at a time (no bit crosses a byte that matters).
+    let oct = r.oct_inv4;
+    let inner_lo = (meta_lo & (meta_lo << 1u)) & 0x10101010u;
+    let inner_hi = (meta_hi & (meta_hi << 1u)) & 0x10101010u;
+    let imask_lo = (inner_lo >> 4u) * 0xffu;
+    let imask_hi = (inner_hi >> 4u) * 0xffu;
+    let bidx_lo = (meta_lo ^ (oct & imask_lo)) & 0x1f1f1f1fu;
+    let bidx_hi = (meta_hi ^ (oct & imask_hi)) & 0x1f1f1f1fu;
+    let cbits_lo = (meta_lo >> 5u) & 0x07070707u;
+    let cbits_hi = (meta_hi >> 5u) & 0x07070707u;
+    var q: array<u32, 12>;
+    for (var i = 0u; i < 12u; i++) {
+        q[i] = gw(n + 8u + i);
+    }
+    var mask = 0u;
+    for (var c = 0u; c < 8u; c++) {
+        if (byte_of(meta_lo, meta_hi, c) == 0u) {
+            continue;
+        }
+        let h = select(0u, 1u, c >= 4u);
+        let sh = (c & 3u) * 8u;
+        var near = r.tmin;
+        var far = tmax;
+        for (var a = 0u; a < 3u; a++) {
+            let qlo = f32((q[4u * a + h] >> sh) & 0xffu);
+            let qhi = f32((q[4u * a + 2u + h] >> sh) & 0xffu);
+            let lo = p[a] + e[a] * qlo;
+            let hi = p[a] + e[a] * qhi;
+            var nn = lo;
+            var ff = hi;
+            if (sign_negative(r.inv[a])) {
+                nn = hi;
+                ff = lo;
+            }
+            let tn = (nn - r.o[a]) * r.inv[a];
+            let tf = ((ff - r.o[a]) * r.inv[a]) * P.box_scale;
+            if (tn > near) {
+                near = tn;
+            }
+            if (tf < far) {
+                far = tf;
+            }
+        }
+        if (near <= far) {
+            mask |= byte_of(cbits_lo, cbits_hi, c) << byte_of(bidx_lo, bidx_hi, c);
+        }
+    }
+    return mask;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Traversal: obvhs's traverse! macro (the same child order, the same saturating 32-entry stack).
+
+const STACK: u32 = 32u;
+
+struct MeshHit {
+    hit: bool,
+    leaf: u32,
+    t: f32,
+    b1: f32,
+    b2: f32,
+}
+
+// Iterations used so far by this invocation, and whether a bound was exceeded.
+var<private> iters: u32;
+var<private> overflow: bool;
+
+// Closest hit in mesh record `m` (MeshBvh::intersect): lowest leaf index on equal t.
+fn intersect_mesh(m: u32, r: PRay) -> MeshHit {
+    var best = MeshHit(false, 0u, 0.0, 0.0, 0.0);
+    let rec = P.mesh_off + 4u * m;
+    let node_off = gw(rec);
+    let node_count = gw(rec + 1u);
+    let vert_off = gw(rec + 2u);
+    if (node_count == 0u || !r.ok) {
+        return best;
+    }
+    var tmax = r.tmax;
+    var stack: array<vec2<u32>, STACK>;
+    var sp = 0u;
+    var cur = vec2<u32>(0u, 0x80000000u);
+    var prim = vec2<u32>(0u, 0u);
+    loop {
+        iters += 1u;
+        if (iters > P.max_iter) {
+            overflow = true;
+            break;
+        }
+        while (prim.y != 0u) {
+            let l = firstLeadingBit(prim.y);
+            prim.y &= ~(1u << l);
+            let li = prim.x + l;
+            let v = vert_off + 9u * li;
+            let a = vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u));
+            let b = vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u));
+            let c = vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u));
+            let h = intersect_triangle(r, a, b, c, tmax);
+            if (h.hit && (!best.hit || h.t < best.t || (h.t == best.t && li < best.leaf))) {
+                best = MeshHit(true, li, h.t, h.b1, h.b2);
+                tmax = h.t;
+            }
+        }
+        prim = vec2<u32>(0u, 0u);
+        if ((cur.y & 0xff000000u) != 0u) {
+            let hits = cur.y;
+            let off = firstLeadingBit(hits);
+            let base = cur.x;
+            cur.y &= ~(1u << off);
+            if ((cur.y & 0xff000000u) != 0u) {
+                stack[sp] = cur;
+                if (sp == STACK - 1u) {
+                    overflow = true;
+                }
+                sp = min(sp + 1u, STACK - 1u);
+            }
+            let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
+            let rel = countOneBits(hits & ~(0xffffffffu << slot));
+            let node = node_off + 20u * (base + rel);
+            let hm = node_hitmask(node, r, tmax);
+            let imask = (gw(node + 3u) >> 24u) & 0xffu;
+            cur.x = gw(node + 4u);
+            prim.x = gw(node + 5u);
+            cur.y = (hm & 0xff000000u) | imask;
+            prim.y = hm & 0x00ffffffu;
+        } else {
+            cur = vec2<u32>(0u, 0u);
+        }
+        if (prim.y == 0u && (cur.y & 0xff000000u) == 0u) {
+            if (sp == 0u) {
+                break;
+            }
+            sp -= 1u;
+            cur = stack[sp];
+        }
+    }
+    return best;
+}
+
+struct SceneResult {
+    hit: bool,
+    inst: u32,
+    leaf: u32,
+    t: f32,
+    b1: f32,
+    b2: f32,
+}
+
+// glam's Affine3A::transform_point3a / transform_vector3a: ((x·X + y·Y) + z·Z) (+ T).
+fn inst_vec(base: u32, v: vec3<f32>, point: bool) -> vec3<f32> {
+    let xa = vec3<f32>(gf(base), gf(base + 1u), gf(base + 2u));
+    let ya = vec3<f32>(gf(base + 3u), gf(base + 4u), gf(base + 5u));
+    let za = vec3<f32>(gf(base + 6u), gf(base + 7u), gf(base + 8u));
+    var res = vec3<f32>(xa.x * v.x, xa.y * v.x, xa.z * v.x);
+    res = vec3<f32>(res.x + ya.x * v.y, res.y + ya.y * v.y, res.z + ya.z * v.y);
+    res = vec3<f32>(res.x + za.x * v.z, res.y + za.y * v.z, res.z + za.z * v.z);
+    if (point) {
+        let ta = vec3<f32>(gf(base + 9u), gf(base + 10u), gf(base + 11u));
+        res = vec3<f32>(res.x + ta.x, res.y + ta.y, res.z + ta.z);
+    }
+    return res;
+}
+
+// Closest hit of a world ray (SceneBvh::intersect, or MeshBvh::intersect in mode 0).
+fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32) -> SceneResult {
+    var best = SceneResult(false, 0u, 0u, 0.0, 0.0, 0.0);
+    let r = prepare_ray(o, d, tmin, tmax0);
+    if (P.mode == 0u) {
+        let h = intersect_mesh(0u, r);
+        return SceneResult(h.hit, 0u, h.leaf, h.t, h.b1, h.b2);
+    }
+    if (P.top_node_count == 0u || !r.ok) {
+        return best;
+    }
+    var tmax = tmax0;
+    var stack: array<vec2<u32>, STACK>;
+    var sp = 0u;
+    var cur = vec2<u32>(0u, 0x80000000u);
+    var prim = vec2<u32>(0u, 0u);
+    loop {
+        iters += 1u;
+        if (iters > P.max_iter) {
+            overflow = true;
+            break;
+        }
+        while (prim.y != 0u && !overflow) {
+            let l = firstLeadingBit(prim.y);
+            prim.y &= ~(1u << l);
+            let i = gw(P.top_index_off + prim.x + l);
+            let ib = P.inst_off + 16u * i;
+            let m = gw(ib);
+            let oo = inst_vec(ib + 4u, o, true);
+            let od = inst_vec(ib + 4u, d, false);
+            let h = intersect_mesh(m, prepare_ray(oo, od, tmin, tmax));
+            if (h.hit && (!best.hit || h.t < best.t || (h.t == best.t && i < best.inst))) {
+                best = SceneResult(true, i, h.leaf, h.t, h.b1, h.b2);
+                tmax = h.t;
+            }
+        }
+        if (overflow) {
+            break;
+        }
+        prim = vec2<u32>(0u, 0u);
+        if ((cur.y & 0xff000000u) != 0u) {
+            let hits = cur.y;
+            let off = firstLeadingBit(hits);
+            let base = cur.x;
+            cur.y &= ~(1u << off);
+            if ((cur.y & 0xff000000u) != 0u) {
+                stack[sp] = cur;
+                if (sp == STACK - 1u) {
+                    overflow = true;
+                }
+                sp = min(sp + 1u, STACK - 1u);
+            }
+            let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
+            let rel = countOneBits(hits & ~(0xffffffffu << slot));
+            let node = P.top_node_off + 20u * (base + rel);
+            let hm = node_hitmask(node, r, tmax);
+            let imask = (gw(node + 3u) >> 24u) & 0xffu;
+            cur.x = gw(node + 4u);
+            prim.x = gw(node + 5u);
+            cur.y = (hm & 0xff000000u) | imask;
+            prim.y = hm & 0x00ffffffu;
+        } else {
+            cur = vec2<u32>(0u, 0u);
+        }
+        if (prim.y == 0u && (cur.y & 0xff000000u) == 0u) {
+            if (sp == 0u) {
+                break;
+            }
+            sp -= 1u;
+            cur = stack[sp];
+        }
+    }
+    return best;
+}

@@ -1,0 +1,193 @@
+//! The scene on the device: one space of `u32` words (mesh records, CWBVH nodes, leaf-ordered
+//! triangle corners, the top level, instances) split into up to [`GEO_CHUNKS`] storage
+//! bindings, so that a scene larger than one binding (128 MiB on lavapipe) still works.
+//! Word `i` is word `i & (2^shift − 1)` of chunk `i >> shift`; see `kernels/bvh.wgsl`.
+
+use crate::bvh::{MeshBvh, SceneBvh};
+use crate::error::{Error, ErrorKind, Result};
+use obvhs::cwbvh::node::CwBvhNode;
+use wgpu::util::DeviceExt;
+
+use super::GpuContext;
+
+/// Number of storage bindings the geometry may be split into.
+pub const GEO_CHUNKS: usize = 8;
+/// Words per CWBVH node (obvhs's 80-byte `CwBvhNode`).
+pub const NODE_WORDS: usize = 20;
+/// Words per instance record.
+pub const INSTANCE_WORDS: usize = 16;
+
+const _: () = assert!(std::mem::size_of::<CwBvhNode>() == NODE_WORDS * 4);
+
+/// The words of a scene and where its parts start.
+#[derive(Clone, Debug, Default)]
+pub struct PackedScene {
+    /// All words.
+    pub words: Vec<u32>,
+    /// 0: one mesh (record 0, world space); 1: instances under a top level.
+    pub mode: u32,
+    /// Word offset of the mesh records (4 words: node offset, node count, vertex offset,
+    /// triangle count).
+    pub mesh_off: u32,
+    /// Word offset of the top-level nodes.
+    pub top_node_off: u32,
+    /// Number of top-level nodes.
+    pub top_node_count: u32,
+    /// Word offset of the top-level leaf → instance table.
+    pub top_index_off: u32,
+    /// Word offset of the instance records.
+    pub inst_off: u32,
+}
+
+fn offset(words: &[u32]) -> Result<u32> {
+    u32::try_from(words.len()).map_err(|_| {
+        Error::new(
+            ErrorKind::Gpu,
+            "scene too large for the GPU backend (more than 2^32 words)",
+        )
+    })
+}
+
+fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &MeshBvh) -> Result<()> {
+    let node_off = offset(words)?;
+    words.extend_from_slice(bytemuck::cast_slice(&m.cwbvh.nodes));
+    let vert_off = offset(words)?;
+    for t in &m.tri_verts {
+        for v in t {
+            words.extend(v.iter().map(|x| x.to_bits()));
+        }
+    }
+    offset(words)?;
+    words[rec] = node_off;
+    words[rec + 1] = m.cwbvh.nodes.len() as u32;
+    words[rec + 2] = vert_off;
+    words[rec + 3] = m.tri_verts.len() as u32;
+    Ok(())
+}
+
+impl PackedScene {
+    /// One mesh, traced in its own space (as [`MeshBvh::intersect`]).
+    pub fn from_mesh(m: &MeshBvh) -> Result<PackedScene> {
+        let mut words = vec![0u32; 4];
+        push_mesh(&mut words, 0, m)?;
+        Ok(PackedScene {
+            words,
+            mode: 0,
+            ..Default::default()
+        })
+    }
+
+    /// Instances of meshes (as [`SceneBvh::intersect`]).
+    pub fn from_scene(s: &SceneBvh) -> Result<PackedScene> {
+        let mut words = vec![0u32; 4 * s.meshes.len().max(1)];
+        for (i, m) in s.meshes.iter().enumerate() {
+            push_mesh(&mut words, 4 * i, m)?;
+        }
+        let top_node_off = offset(&words)?;
+        words.extend_from_slice(bytemuck::cast_slice(&s.top.nodes));
+        let top_index_off = offset(&words)?;
+        words.extend_from_slice(&s.top_index);
+        let inst_off = offset(&words)?;
+        for inst in &s.instances {
+            let m = inst.world_to_object;
+            words.extend_from_slice(&[inst.mesh, 0, 0, 0]);
+            for c in [
+                m.matrix3.x_axis,
+                m.matrix3.y_axis,
+                m.matrix3.z_axis,
+                m.translation,
+            ] {
+                words.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits()]);
+            }
+        }
+        offset(&words)?;
+        Ok(PackedScene {
+            words,
+            mode: 1,
+            mesh_off: 0,
+            top_node_off,
+            top_node_count: s.top.nodes.len() as u32,
+            top_index_off,
+            inst_off,
+        })
+    }
+
+    /// Bytes of the words.
+    pub fn bytes(&self) -> u64 {
+        self.words.len() as u64 * 4
+    }
+}
+
+/// The geometry words in device buffers.
+pub struct GpuGeometry {
+    /// The chunk buffers; unused ones are small placeholders.
+    pub chunks: Vec<wgpu::Buffer>,
+    /// Chunks actually used.
+    pub used_chunks: usize,
+    /// log2 of the words per chunk.
+    pub chunk_shift: u32,
+}
+
+impl GpuGeometry {
+    /// Uploads `packed`, in chunks of the largest power-of-two number of words one storage
+    /// binding holds on this adapter, or of at most `max_chunk_words` words when given (tests
+    /// use a small value to exercise the split).
+    pub fn upload(
+        ctx: &GpuContext,
+        packed: &PackedScene,
+        max_chunk_words: Option<u64>,
+    ) -> Result<GpuGeometry> {
+        let binding = ctx
+            .limits
+            .max_storage_buffer_binding_size
+            .min(ctx.limits.max_buffer_size);
+        let mut limit = (binding / 4).min(1 << 30);
+        if let Some(m) = max_chunk_words {
+            limit = limit.min(m.max(4));
+        }
+        let chunk_shift = 63 - limit.leading_zeros();
+        let chunk = 1usize << chunk_shift;
+        let words = &packed.words;
+        let used_chunks = words.len().div_ceil(chunk).max(1);
+        if used_chunks > GEO_CHUNKS {
+            return Err(Error::new(
+                ErrorKind::Gpu,
+                format!(
+                    "scene needs {} MiB of GPU geometry, more than {GEO_CHUNKS} storage bindings of {} MiB on {}",
+                    packed.bytes() >> 20,
+                    (chunk * 4) >> 20,
+                    ctx.describe()
+                ),
+            ));
+        }
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let mut chunks = Vec::with_capacity(GEO_CHUNKS);
+        for c in 0..GEO_CHUNKS {
+            let lo = (c * chunk).min(words.len());
+            let hi = ((c + 1) * chunk).min(words.len());
+            let mut data: Vec<u32> = words[lo..hi].to_vec();
+            if data.len() < 4 {
+                data.resize(4, 0);
+            }
+            chunks.push(
+                ctx.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("limitray geometry"),
+                        contents: bytemuck::cast_slice(&data),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    }),
+            );
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::new(
+                ErrorKind::Gpu,
+                format!("uploading {} MiB of geometry: {e}", packed.bytes() >> 20),
+            ));
+        }
+        Ok(GpuGeometry {
+            chunks,
+            used_chunks,
+            chunk_shift,
+        })
+    }
+}

@@ -1,0 +1,18 @@
+//! The wgpu compute backend: the same BVH, the same watertight triangle test and the same
+//! conservative box test as the CPU path, in WGSL (`kernels/*.wgsl`), on any Vulkan adapter
+//! (lavapipe on machines without a GPU: `bash scripts/setup-lavapipe.sh`).
+//!
+//! On an adapter whose `+ − × ÷` round like Rust's `f32` (lavapipe does, and the CPU code uses
+//! no fused multiply-add), closest hits are bitwise the CPU's: the same triangle and the same
+//! `t`. The CPU's `f64` re-evaluation of zero edge functions is emulated exactly with integer
+//! arithmetic (`kernels/exact.wgsl`).
+
+pub mod cli;
+pub mod device;
+pub mod exact;
+pub mod geometry;
+pub mod trace;
+
+pub use device::{adapters, context_for_tests, GpuContext};
+pub use geometry::{GpuGeometry, PackedScene};
+pub use trace::{trace_mesh, trace_scene, GpuTracer, RawHit, TraceOptions};

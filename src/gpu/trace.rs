@@ -1,0 +1,343 @@
+//! Closest-hit queries on the GPU (`kernels/trace.wgsl`): bitwise the CPU's
+//! [`MeshBvh::intersect`] and [`SceneBvh::intersect`] on a device whose basic arithmetic rounds
+//! like Rust's `f32` (lavapipe). The kernel returns `(instance, leaf, t, b1, b2)`; the hit
+//! record is completed on the host by the same code as the CPU path.
+
+use super::geometry::{GpuGeometry, PackedScene, GEO_CHUNKS};
+use super::GpuContext;
+use crate::bvh::{Hit, MeshBvh, Ray, SceneBvh, SceneHit};
+use crate::error::{Error, ErrorKind, Result};
+use wgpu::util::DeviceExt;
+
+/// The kernel sources, in inclusion order.
+pub const BVH_WGSL: [&str; 2] = [
+    include_str!("../../kernels/exact.wgsl"),
+    include_str!("../../kernels/bvh.wgsl"),
+];
+const TRACE_WGSL: &str = include_str!("../../kernels/trace.wgsl");
+
+/// Workgroup size of the kernels.
+pub const WORKGROUP: u32 = 64;
+
+/// The uniform block of `kernels/bvh.wgsl` (`struct Params`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Params {
+    /// log2 of the words per geometry chunk.
+    pub chunk_shift: u32,
+    /// 0: one mesh; 1: instances.
+    pub mode: u32,
+    /// See [`PackedScene::mesh_off`].
+    pub mesh_off: u32,
+    /// See [`PackedScene::top_node_off`].
+    pub top_node_off: u32,
+    /// See [`PackedScene::top_node_count`].
+    pub top_node_count: u32,
+    /// See [`PackedScene::top_index_off`].
+    pub top_index_off: u32,
+    /// See [`PackedScene::inst_off`].
+    pub inst_off: u32,
+    /// Rays (or work items) in this dispatch.
+    pub ray_count: u32,
+    /// Traversal loop iterations allowed per ray.
+    pub max_iter: u32,
+    /// `1 + 2γ(3)` of the box test, as the CPU computes it.
+    pub box_scale: f32,
+    /// Kernel-specific.
+    pub user0: u32,
+    /// Kernel-specific.
+    pub user1: u32,
+}
+
+impl Params {
+    /// The geometry part of the parameters.
+    pub fn new(packed: &PackedScene, geo: &GpuGeometry, max_iter: u32) -> Params {
+        Params {
+            chunk_shift: geo.chunk_shift,
+            mode: packed.mode,
+            mesh_off: packed.mesh_off,
+            top_node_off: packed.top_node_off,
+            top_node_count: packed.top_node_count,
+            top_index_off: packed.top_index_off,
+            inst_off: packed.inst_off,
+            ray_count: 0,
+            max_iter,
+            box_scale: 1.0 + 2.0 * crate::bvh::triangle::GAMMA3,
+            user0: 0,
+            user1: 0,
+        }
+    }
+}
+
+/// Options of the GPU queries.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceOptions {
+    /// Rays per dispatch (a dispatch cannot be cancelled: keep each well under a second).
+    pub tile_rays: usize,
+    /// Traversal loop iterations allowed per ray before it is reported as overflowed.
+    pub max_iter: u32,
+    /// Upper bound on the words of one geometry chunk (default: what a binding holds).
+    pub max_chunk_words: Option<u64>,
+}
+
+impl Default for TraceOptions {
+    fn default() -> Self {
+        TraceOptions {
+            tile_rays: 1 << 16,
+            max_iter: 1 << 20,
+            max_chunk_words: None,
+        }
+    }
+}
+
+/// The bind group layout of a kernel: the uniform at 0, the geometry chunks at 1..=8, then
+/// `extra` storage buffers (`true`: read-only) from binding 9 on.
+pub fn layout(ctx: &GpuContext, extra: &[bool]) -> wgpu::BindGroupLayout {
+    let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }];
+    for c in 0..GEO_CHUNKS as u32 {
+        entries.push(storage(1 + c, true));
+    }
+    for (i, &ro) in extra.iter().enumerate() {
+        entries.push(storage(1 + GEO_CHUNKS as u32 + i as u32, ro));
+    }
+    ctx.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("limitray"),
+            entries: &entries,
+        })
+}
+
+/// A bind group over `params`, the geometry and `extra` buffers (bindings from 9 on).
+pub fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    params: &wgpu::Buffer,
+    geo: &GpuGeometry,
+    extra: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let mut entries = vec![wgpu::BindGroupEntry {
+        binding: 0,
+        resource: params.as_entire_binding(),
+    }];
+    for (c, b) in geo.chunks.iter().enumerate() {
+        entries.push(wgpu::BindGroupEntry {
+            binding: 1 + c as u32,
+            resource: b.as_entire_binding(),
+        });
+    }
+    for (i, b) in extra.iter().enumerate() {
+        entries.push(wgpu::BindGroupEntry {
+            binding: 1 + GEO_CHUNKS as u32 + i as u32,
+            resource: b.as_entire_binding(),
+        });
+    }
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("limitray"),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// What the kernel found for one ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RawHit {
+    /// 0 miss, 1 hit, 2 traversal bound exceeded.
+    pub status: u32,
+    /// Instance (0 for a single mesh).
+    pub instance: u32,
+    /// Leaf-ordered triangle of the instance's mesh.
+    pub leaf: u32,
+    /// Ray parameter.
+    pub t: f32,
+    /// Barycentric weight of corner 1.
+    pub b1: f32,
+    /// Barycentric weight of corner 2.
+    pub b2: f32,
+    /// Traversal loop iterations used.
+    pub iterations: u32,
+}
+
+/// A scene on the device with the closest-hit kernel.
+pub struct GpuTracer<'a> {
+    ctx: &'a GpuContext,
+    packed: PackedScene,
+    geo: GpuGeometry,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    opts: TraceOptions,
+}
+
+impl<'a> GpuTracer<'a> {
+    /// Uploads `packed` and compiles the kernel.
+    pub fn new(ctx: &'a GpuContext, packed: PackedScene, opts: TraceOptions) -> Result<Self> {
+        let geo = GpuGeometry::upload(ctx, &packed, opts.max_chunk_words)?;
+        let layout = layout(ctx, &[true, false]);
+        let src = format!("{}\n{}\n{}", BVH_WGSL[0], BVH_WGSL[1], TRACE_WGSL);
+        let pipeline = ctx.compute_pipeline("trace", &src, "trace_main", &layout)?;
+        Ok(GpuTracer {
+            ctx,
+            packed,
+            geo,
+            pipeline,
+            layout,
+            opts,
+        })
+    }
+
+    /// Geometry chunks in use.
+    pub fn used_chunks(&self) -> usize {
+        self.geo.used_chunks
+    }
+
+    /// Closest hits of `rays`, tile by tile.
+    pub fn trace_raw(&self, rays: &[Ray]) -> Result<Vec<RawHit>> {
+        let ctx = self.ctx;
+        let tile = self.opts.tile_rays.clamp(WORKGROUP as usize, 1 << 22);
+        let tile = tile.min(rays.len().max(1));
+        let ray_bytes = (tile * 32) as u64;
+        let ray_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("rays"),
+            size: ray_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let hit_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hits"),
+            size: ray_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let read_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hits readback"),
+            size: ray_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut params = Params::new(&self.packed, &self.geo, self.opts.max_iter);
+        let param_buf = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("params"),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+        let bg = bind_group(ctx, &self.layout, &param_buf, &self.geo, &[&ray_buf, &hit_buf]);
+        let mut out = Vec::with_capacity(rays.len());
+        for part in rays.chunks(tile) {
+            let mut data = Vec::with_capacity(part.len() * 8);
+            for r in part {
+                data.extend_from_slice(&[
+                    r.origin[0],
+                    r.origin[1],
+                    r.origin[2],
+                    r.tmin,
+                    r.dir[0],
+                    r.dir[1],
+                    r.dir[2],
+                    r.tmax,
+                ]);
+            }
+            ctx.queue
+                .write_buffer(&ray_buf, 0, bytemuck::cast_slice(&data));
+            params.ray_count = part.len() as u32;
+            ctx.queue
+                .write_buffer(&param_buf, 0, bytemuck::bytes_of(&params));
+            let mut enc = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("trace"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bg, &[]);
+                pass.dispatch_workgroups((part.len() as u32).div_ceil(WORKGROUP), 1, 1);
+            }
+            let n = (part.len() * 32) as u64;
+            enc.copy_buffer_to_buffer(&hit_buf, 0, &read_buf, 0, n);
+            ctx.queue.submit([enc.finish()]);
+            let bytes = ctx.read_buffer(&read_buf, n)?;
+            let w: &[u32] = bytemuck::cast_slice(&bytes);
+            for h in w.chunks_exact(8) {
+                out.push(RawHit {
+                    status: h[0],
+                    instance: h[1],
+                    leaf: h[2],
+                    t: f32::from_bits(h[3]),
+                    b1: f32::from_bits(h[4]),
+                    b2: f32::from_bits(h[5]),
+                    iterations: h[6],
+                });
+            }
+        }
+        Ok(out)
+    }
+}
+
+fn overflow_error(n: usize) -> Error {
+    Error::new(
+        ErrorKind::Gpu,
+        format!("{n} ray(s) exceeded the GPU traversal bound (iterations or stack depth)"),
+    )
+}
+
+/// Closest hits of `rays` on one mesh: the answers of [`MeshBvh::intersect`].
+pub fn trace_mesh(
+    ctx: &GpuContext,
+    bvh: &MeshBvh,
+    rays: &[Ray],
+    opts: TraceOptions,
+) -> Result<Vec<Option<Hit>>> {
+    let tracer = GpuTracer::new(ctx, PackedScene::from_mesh(bvh)?, opts)?;
+    let raw = tracer.trace_raw(rays)?;
+    let over = raw.iter().filter(|h| h.status == 2).count();
+    if over > 0 {
+        return Err(overflow_error(over));
+    }
+    Ok(raw
+        .iter()
+        .map(|h| (h.status == 1).then(|| bvh.hit(h.leaf as usize, h.t, h.b1, h.b2)))
+        .collect())
+}
+
+/// Closest hits of `rays` in a scene: the answers of [`SceneBvh::intersect`].
+pub fn trace_scene(
+    ctx: &GpuContext,
+    scene: &SceneBvh,
+    rays: &[Ray],
+    opts: TraceOptions,
+) -> Result<Vec<Option<SceneHit>>> {
+    let tracer = GpuTracer::new(ctx, PackedScene::from_scene(scene)?, opts)?;
+    let raw = tracer.trace_raw(rays)?;
+    let over = raw.iter().filter(|h| h.status == 2).count();
+    if over > 0 {
+        return Err(overflow_error(over));
+    }
+    Ok(raw
+        .iter()
+        .map(|h| {
+            (h.status == 1)
+                .then(|| scene.hit_record(h.instance, h.leaf as usize, h.t, h.b1, h.b2))
+        })
+        .collect())
+}
