@@ -118,6 +118,14 @@ impl PackedScene {
     }
 }
 
+fn size(bytes: u64) -> String {
+    if bytes >= 1 << 20 {
+        format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
+    } else {
+        format!("{:.1} KiB", bytes as f64 / 1024.0)
+    }
+}
+
 /// The geometry words in device buffers.
 pub struct GpuGeometry {
     /// The chunk buffers; unused ones are small placeholders.
@@ -153,9 +161,9 @@ impl GpuGeometry {
             return Err(Error::new(
                 ErrorKind::Gpu,
                 format!(
-                    "scene needs {} MiB of GPU geometry, more than {GEO_CHUNKS} storage bindings of {} MiB on {}",
-                    packed.bytes() >> 20,
-                    (chunk * 4) >> 20,
+                    "scene needs {} of GPU geometry, more than {GEO_CHUNKS} storage bindings of {} on {}",
+                    size(packed.bytes()),
+                    size(chunk as u64 * 4),
                     ctx.describe()
                 ),
             ));
@@ -181,7 +189,7 @@ impl GpuGeometry {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::new(
                 ErrorKind::Gpu,
-                format!("uploading {} MiB of geometry: {e}", packed.bytes() >> 20),
+                format!("uploading {} of geometry: {e}", size(packed.bytes())),
             ));
         }
         Ok(GpuGeometry {
