@@ -118,7 +118,9 @@ pub fn trace(
     input: impl BufRead,
     output: impl Write,
 ) -> Result<()> {
-    trace_with(table, exact, input, output, |rays| Ok(bvh.intersect_batch(rays)))
+    trace_with(table, exact, input, output, |rays| {
+        Ok(bvh.intersect_batch(rays))
+    })
 }
 
 /// [`trace`] with the closest hits of the parsed rays computed by `hits` (one result per ray,

@@ -51,11 +51,7 @@ fn meshes() -> Vec<(String, ControlMesh, u32)> {
             limitray::mesh::obj::read_obj(&root.join("scenes/creased_cube.obj")).unwrap(),
             8,
         ),
-        (
-            "grid(6)".to_string(),
-            limitray::mesh::generate::grid(6),
-            4,
-        ),
+        ("grid(6)".to_string(), limitray::mesh::generate::grid(6), 4),
         (
             "cube".to_string(),
             common::cube_builder().build().unwrap(),
@@ -66,7 +62,11 @@ fn meshes() -> Vec<(String, ControlMesh, u32)> {
         for (name, rate) in [("catmark_car.obj", 2), ("catmark_bishop.obj", 3)] {
             let p = dir.join("opensubdiv").join(name);
             if p.exists() {
-                v.push((name.to_string(), limitray::mesh::obj::read_obj(&p).unwrap(), rate));
+                v.push((
+                    name.to_string(),
+                    limitray::mesh::obj::read_obj(&p).unwrap(),
+                    rate,
+                ));
             }
         }
     }
@@ -101,7 +101,12 @@ fn ray_set(bvh: &MeshBvh, n: usize, seed: u64) -> Vec<Ray> {
     rays
 }
 
-fn assert_same_mesh_hits(bvh: &MeshBvh, rays: &[Ray], gpu: &[Option<limitray::bvh::Hit>], what: &str) {
+fn assert_same_mesh_hits(
+    bvh: &MeshBvh,
+    rays: &[Ray],
+    gpu: &[Option<limitray::bvh::Hit>],
+    what: &str,
+) {
     assert_eq!(gpu.len(), rays.len());
     let mut differ = 0;
     let mut hits = 0;
@@ -124,7 +129,10 @@ fn assert_same_mesh_hits(bvh: &MeshBvh, rays: &[Ray], gpu: &[Option<limitray::bv
         differ += !same as usize;
     }
     assert_eq!(differ, 0, "{what}: {differ} of {} rays differ", rays.len());
-    assert!(hits > rays.len() / 10, "{what}: too few hits ({hits}) to mean anything");
+    assert!(
+        hits > rays.len() / 10,
+        "{what}: too few hits ({hits}) to mean anything"
+    );
 }
 
 #[test]
@@ -142,9 +150,9 @@ fn exact_edge_function_matches_cpu_f64() {
         let (a, b) = (rnd(-20, 20), rnd(-20, 20));
         let c = match i % 5 {
             0 => rnd(-20, 20),
-            1 => a,                                            // exact cancellation
-            2 => f32::from_bits(a.to_bits() + 1 + (i % 3)),    // near cancellation
-            3 => rnd(-70, -40),                                // huge exponent gaps
+            1 => a,                                         // exact cancellation
+            2 => f32::from_bits(a.to_bits() + 1 + (i % 3)), // near cancellation
+            3 => rnd(-70, -40),                             // huge exponent gaps
             _ => b,
         };
         let d = match i % 5 {
@@ -200,7 +208,11 @@ fn exact_edge_function_matches_cpu_f64() {
         let want = edge_reference(c[0], c[1], c[2], c[3]);
         if want.to_bits() != g.to_bits() {
             if bad < 10 {
-                eprintln!("edge_exact{c:?}: gpu {g:e} ({:#x}) cpu {want:e} ({:#x})", g.to_bits(), want.to_bits());
+                eprintln!(
+                    "edge_exact{c:?}: gpu {g:e} ({:#x}) cpu {want:e} ({:#x})",
+                    g.to_bits(),
+                    want.to_bits()
+                );
             }
             bad += 1;
         }
@@ -216,7 +228,11 @@ fn mesh_hits_are_bitwise_the_cpu_hits() {
         let rays = ray_set(&bvh, 3000, 5);
         let gpu = trace_mesh(&ctx, &bvh, &rays, TraceOptions::default()).unwrap();
         assert_same_mesh_hits(&bvh, &rays, &gpu, &name);
-        eprintln!("{name}: {} rays, {} triangles: all equal", rays.len(), bvh.tri_index.len());
+        eprintln!(
+            "{name}: {} rays, {} triangles: all equal",
+            rays.len(),
+            bvh.tri_index.len()
+        );
     }
 }
 
@@ -372,13 +388,25 @@ fn cli_trace_gpu_prints_what_the_cpu_prints() {
     let run = |backend: &str| {
         use std::io::Write;
         let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_limitray"))
-            .args(["trace", mesh.to_str().unwrap(), "--rate", "4", "--backend", backend])
+            .args([
+                "trace",
+                mesh.to_str().unwrap(),
+                "--rate",
+                "4",
+                "--backend",
+                backend,
+            ])
             .stdin(std::process::Stdio::piped())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
-        child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(input.as_bytes())
+            .unwrap();
         let out = child.wait_with_output().unwrap();
         (out.status.code(), String::from_utf8(out.stdout).unwrap())
     };

@@ -267,6 +267,7 @@ pub(crate) fn node_hitmask(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tma
 
 /// Scalar reference of [`node_hitmask`]: the same operations in the same order.
 #[inline(always)]
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))] // the SSE version is used there
 pub(crate) fn node_hitmask_scalar(
     node: &CwBvhNode,
     r: &PreparedRay,

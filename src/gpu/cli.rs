@@ -124,10 +124,7 @@ pub fn bench_gpu(args: &BenchGpuArgs) -> Result<String> {
         .map_err(|e| Error::new(ErrorKind::Usage, e.to_string()))?;
     let bounds = bvh.bounds();
     let sets: [(&str, Vec<Ray>); 2] = [
-        (
-            "coherent",
-            crate::cli_trace::camera_rays(bounds, args.rays),
-        ),
+        ("coherent", crate::cli_trace::camera_rays(bounds, args.rays)),
         (
             "incoherent",
             crate::cli_trace::random_rays(bounds, args.rays, 11),

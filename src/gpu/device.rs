@@ -155,7 +155,10 @@ impl GpuContext {
 
     /// Fails with the first error that no error scope caught since the last call, if any.
     pub fn check(&self) -> Result<()> {
-        let mut v = self.uncaptured.lock().map_err(|_| gpu_err("error log poisoned"))?;
+        let mut v = self
+            .uncaptured
+            .lock()
+            .map_err(|_| gpu_err("error log poisoned"))?;
         if v.is_empty() {
             return Ok(());
         }

@@ -240,7 +240,13 @@ impl<'a> GpuTracer<'a> {
                 contents: bytemuck::bytes_of(&params),
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             });
-        let bg = bind_group(ctx, &self.layout, &param_buf, &self.geo, &[&ray_buf, &hit_buf]);
+        let bg = bind_group(
+            ctx,
+            &self.layout,
+            &param_buf,
+            &self.geo,
+            &[&ray_buf, &hit_buf],
+        );
         let mut out = Vec::with_capacity(rays.len());
         for part in rays.chunks(tile) {
             let mut data = Vec::with_capacity(part.len() * 8);
@@ -336,8 +342,7 @@ pub fn trace_scene(
     Ok(raw
         .iter()
         .map(|h| {
-            (h.status == 1)
-                .then(|| scene.hit_record(h.instance, h.leaf as usize, h.t, h.b1, h.b2))
+            (h.status == 1).then(|| scene.hit_record(h.instance, h.leaf as usize, h.t, h.b1, h.b2))
         })
         .collect())
 }
