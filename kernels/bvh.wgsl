@@ -49,7 +49,13 @@ struct Params {
 @group(0) @binding(7) var<storage, read> g6: array<u32>;
 @group(0) @binding(8) var<storage, read> g7: array<u32>;
 
+// Chunks in use, fixed when the pipeline is created (one chunk: no chunk arithmetic).
+override GEO_USED: u32 = 8u;
+
 fn gw(i: u32) -> u32 {
+    if (GEO_USED == 1u) {
+        return g0[i];
+    }
     let c = i >> P.chunk_shift;
     let o = i & ((1u << P.chunk_shift) - 1u);
     switch c {

@@ -172,7 +172,8 @@ impl GpuContext {
         }))
     }
 
-    /// Compiles `source` and creates a compute pipeline of `entry` with `layout`, inside a
+    /// Compiles `source` and creates a compute pipeline of `entry` with `layout` and the
+    /// values of its `override` constants, inside a
     /// validation error scope: a shader or layout error becomes an [`Error`], not a panic.
     pub fn compute_pipeline(
         &self,
@@ -180,6 +181,7 @@ impl GpuContext {
         source: &str,
         entry: &str,
         layout: &wgpu::BindGroupLayout,
+        constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = self
@@ -202,7 +204,10 @@ impl GpuContext {
                 layout: Some(&pl),
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    zero_initialize_workgroup_memory: false,
+                },
                 cache: None,
             });
         if let Some(e) = pollster::block_on(scope.pop()) {

@@ -41,7 +41,7 @@ pub fn edge_exact_gpu(ctx: &GpuContext, cases: &[[f32; 4]]) -> Result<Vec<f32>> 
             entries: &[entry(0, true), entry(1, false)],
         });
     let src = format!("{}\n{}", super::trace::BVH_WGSL[0], EXACT_TEST_WGSL);
-    let pipeline = ctx.compute_pipeline("exact_test", &src, "exact_main", &layout)?;
+    let pipeline = ctx.compute_pipeline("exact_test", &src, "exact_main", &layout, &[])?;
     let input = ctx
         .device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {

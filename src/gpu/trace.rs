@@ -72,7 +72,8 @@ impl Params {
 /// Options of the GPU queries.
 #[derive(Clone, Copy, Debug)]
 pub struct TraceOptions {
-    /// Rays per dispatch (a dispatch cannot be cancelled: keep each well under a second).
+    /// Largest number of rays per dispatch; dispatches are sized to take about
+    /// [`TARGET_DISPATCH_S`] each (a dispatch cannot be cancelled).
     pub tile_rays: usize,
     /// Traversal loop iterations allowed per ray before it is reported as overflowed.
     pub max_iter: u32,
@@ -83,7 +84,7 @@ pub struct TraceOptions {
 impl Default for TraceOptions {
     fn default() -> Self {
         TraceOptions {
-            tile_rays: 1 << 16,
+            tile_rays: 1 << 18,
             max_iter: 1 << 20,
             max_chunk_words: None,
         }
@@ -192,7 +193,13 @@ impl<'a> GpuTracer<'a> {
         let geo = GpuGeometry::upload(ctx, &packed, opts.max_chunk_words)?;
         let layout = layout(ctx, &[true, false]);
         let src = format!("{}\n{}\n{}", BVH_WGSL[0], BVH_WGSL[1], TRACE_WGSL);
-        let pipeline = ctx.compute_pipeline("trace", &src, "trace_main", &layout)?;
+        let pipeline = ctx.compute_pipeline(
+            "trace",
+            &src,
+            "trace_main",
+            &layout,
+            &[("GEO_USED", geo.used_chunks as f64)],
+        )?;
         Ok(GpuTracer {
             ctx,
             packed,
@@ -248,7 +255,14 @@ impl<'a> GpuTracer<'a> {
             &[&ray_buf, &hit_buf],
         );
         let mut out = Vec::with_capacity(rays.len());
-        for part in rays.chunks(tile) {
+        // Dispatches grow or shrink towards TARGET_DISPATCH_S each (a dispatch cannot be
+        // cancelled, and a long one can trip a driver watchdog).
+        let mut n = tile.min(4096);
+        let mut done = 0;
+        while done < rays.len() {
+            let part = &rays[done..(done + n).min(rays.len())];
+            done += part.len();
+            let t0 = std::time::Instant::now();
             let mut data = Vec::with_capacity(part.len() * 8);
             for r in part {
                 data.extend_from_slice(&[
@@ -279,10 +293,11 @@ impl<'a> GpuTracer<'a> {
                 pass.set_bind_group(0, &bg, &[]);
                 pass.dispatch_workgroups((part.len() as u32).div_ceil(WORKGROUP), 1, 1);
             }
-            let n = (part.len() * 32) as u64;
-            enc.copy_buffer_to_buffer(&hit_buf, 0, &read_buf, 0, n);
+            let size = (part.len() * 32) as u64;
+            enc.copy_buffer_to_buffer(&hit_buf, 0, &read_buf, 0, size);
             ctx.queue.submit([enc.finish()]);
-            let bytes = ctx.read_buffer(&read_buf, n)?;
+            let bytes = ctx.read_buffer(&read_buf, size)?;
+            n = next_tile(part.len(), t0.elapsed().as_secs_f64(), tile);
             let w: &[u32] = bytemuck::cast_slice(&bytes);
             for h in w.chunks_exact(8) {
                 out.push(RawHit {
@@ -298,6 +313,18 @@ impl<'a> GpuTracer<'a> {
         }
         Ok(out)
     }
+}
+
+/// Seconds a dispatch should take.
+pub const TARGET_DISPATCH_S: f64 = 0.25;
+
+/// The size of the next dispatch after one of `n` items took `secs`, at most `cap`.
+pub fn next_tile(n: usize, secs: f64, cap: usize) -> usize {
+    let rate = n as f64 / secs.max(1e-4);
+    let want = (rate * TARGET_DISPATCH_S) as usize;
+    want.clamp(WORKGROUP as usize, (2 * n).max(WORKGROUP as usize))
+        .min(cap)
+        .max(1)
 }
 
 fn overflow_error(n: usize) -> Error {
