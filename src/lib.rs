@@ -9,6 +9,8 @@
 
 pub mod bench;
 pub mod cli_eval;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod error;
 pub mod info;
 pub mod mesh;

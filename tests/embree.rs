@@ -1,0 +1,2 @@
+//! Embree cross-checks (feature `embree`).
+#![cfg(feature = "embree")]
