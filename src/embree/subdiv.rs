@@ -153,11 +153,7 @@ pub fn subdivision_scene(
     rate: f32,
     options: SceneOptions,
 ) -> Result<Scene> {
-    let mode = match std::env::var("LIMITRAY_EMBREE_MODE") {
-        Ok(m) => m.parse().unwrap_or(subdivision_mode(boundary)),
-        Err(_) => subdivision_mode(boundary),
-    };
-    let g = subdivision_geometry_with_mode(device, mesh, mode, rate)?;
+    let g = subdivision_geometry(device, mesh, boundary, rate)?;
     let mut b = SceneBuilder::new(device, options)?;
     b.attach(g)?;
     b.commit()
