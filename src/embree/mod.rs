@@ -12,9 +12,9 @@
 pub mod cli;
 pub mod crosscheck;
 pub mod ffi;
-pub mod subdiv;
-// TRI pub mod triangles;
 pub mod rays;
+pub mod subdiv;
+pub mod triangles;
 
 use crate::error::{Error, ErrorKind, Result};
 use std::ffi::{c_char, c_void, CStr, CString};
@@ -125,7 +125,9 @@ impl Device {
     /// Embree's version as `major * 10000 + minor * 100 + patch` (e.g. 40400).
     pub fn version(&self) -> u32 {
         // SAFETY: valid device, documented property.
-        unsafe { ffi::rtcGetDeviceProperty(self.inner.raw, ffi::RTC_DEVICE_PROPERTY_VERSION) as u32 }
+        unsafe {
+            ffi::rtcGetDeviceProperty(self.inner.raw, ffi::RTC_DEVICE_PROPERTY_VERSION) as u32
+        }
     }
 
     /// Turns the device's pending error (if any) into a [`crate::Error`] naming `what`.
@@ -210,7 +212,8 @@ impl Geometry {
         let stride = components * std::mem::size_of::<T>();
         let count = data.len() / components;
         // SAFETY: valid geometry; Embree returns `stride * count` writable bytes (plus padding).
-        let ptr = unsafe { ffi::rtcSetNewGeometryBuffer(self.raw, kind, slot, format, stride, count) };
+        let ptr =
+            unsafe { ffi::rtcSetNewGeometryBuffer(self.raw, kind, slot, format, stride, count) };
         self.device.check("rtcSetNewGeometryBuffer")?;
         if ptr.is_null() {
             return Err(Error::new(

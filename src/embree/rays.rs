@@ -78,7 +78,8 @@ pub fn incoherent(bounds: [[f64; 3]; 2], n: usize, seed: u64) -> Vec<TestRay> {
         .map(|_| {
             let s = rng.unit_vector();
             let o = [c[0] + diag * s[0], c[1] + diag * s[1], c[2] + diag * s[2]];
-            let target: [f64; 3] = std::array::from_fn(|k| lo[k] + (hi[k] - lo[k]) * rng.next_f64());
+            let target: [f64; 3] =
+                std::array::from_fn(|k| lo[k] + (hi[k] - lo[k]) * rng.next_f64());
             let d = normalise([target[0] - o[0], target[1] - o[1], target[2] - o[2]]);
             TestRay {
                 origin: o.map(|x| x as f32),

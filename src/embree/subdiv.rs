@@ -21,6 +21,45 @@ use super::{ffi, Device, Geometry, Scene, SceneBuilder, SceneOptions};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{BoundaryInterpolation, ControlMesh, SHARPNESS_INFINITE};
 
+/// Most vertices per face Embree's subdivision geometry accepts (its documented range is 3–15).
+pub const MAX_FACE_SIZE: usize = 15;
+
+/// Most faces around one vertex: Embree's one-ring arrays hold 64 faces
+/// (`MAX_RING_FACE_VALENCE`); catmark_pole360 (valence 360) corrupts its heap.
+pub const MAX_VERTEX_VALENCE: usize = 64;
+
+/// Checks the limits of Embree's subdivision geometry ([`MAX_FACE_SIZE`],
+/// [`MAX_VERTEX_VALENCE`]) so that unsupported meshes get an error instead of memory corruption.
+pub fn check_embree_limits(mesh: &ControlMesh) -> Result<()> {
+    use crate::mesh::Element;
+    for f in 0..mesh.num_faces() {
+        let n = mesh.face(f).len();
+        if n > MAX_FACE_SIZE {
+            return Err(mesh.error_at(
+                ErrorKind::Usage,
+                Element::Face(f),
+                format!("Embree's subdivision geometry supports faces of at most {MAX_FACE_SIZE} vertices; this one has {n}"),
+            ));
+        }
+    }
+    let mut valence = vec![0usize; mesh.num_vertices()];
+    for &v in &mesh.face_verts {
+        valence[v as usize] += 1;
+    }
+    if let Some((v, &n)) = valence
+        .iter()
+        .enumerate()
+        .find(|(_, &n)| n > MAX_VERTEX_VALENCE)
+    {
+        return Err(mesh.error_at(
+            ErrorKind::Usage,
+            Element::Vertex(v),
+            format!("Embree's subdivision geometry supports at most {MAX_VERTEX_VALENCE} faces around a vertex; this one has {n}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Largest tessellation rate accepted (Embree itself clamps grids far below this).
 pub const MAX_RATE: f32 = 4096.0;
 
@@ -73,13 +112,20 @@ pub fn subdivision_geometry_with_mode(
     rate: f32,
 ) -> Result<Geometry> {
     mesh.validate()?;
+    check_embree_limits(mesh)?;
     check_rate(rate)?;
     if mesh.num_faces() == 0 {
         return Err(Error::new(ErrorKind::Usage, "the mesh has no faces"));
     }
     let mut g = Geometry::new(device, ffi::RTC_GEOMETRY_TYPE_SUBDIVISION)?;
     let sizes: Vec<u32> = mesh.face_offsets.windows(2).map(|w| w[1] - w[0]).collect();
-    g.set_buffer(ffi::RTC_BUFFER_TYPE_FACE, 0, ffi::RTC_FORMAT_UINT, 1, &sizes)?;
+    g.set_buffer(
+        ffi::RTC_BUFFER_TYPE_FACE,
+        0,
+        ffi::RTC_FORMAT_UINT,
+        1,
+        &sizes,
+    )?;
     g.set_buffer(
         ffi::RTC_BUFFER_TYPE_INDEX,
         0,
@@ -92,7 +138,13 @@ pub fn subdivision_geometry_with_mode(
         .iter()
         .flat_map(|p| p.map(|c| c as f32))
         .collect();
-    g.set_buffer(ffi::RTC_BUFFER_TYPE_VERTEX, 0, ffi::RTC_FORMAT_FLOAT3, 3, &verts)?;
+    g.set_buffer(
+        ffi::RTC_BUFFER_TYPE_VERTEX,
+        0,
+        ffi::RTC_FORMAT_FLOAT3,
+        3,
+        &verts,
+    )?;
 
     let creases: Vec<_> = mesh.creases.iter().filter(|c| c.sharpness > 0.0).collect();
     let idx: Vec<u32> = creases.iter().flat_map(|c| [c.v0, c.v1]).collect();
@@ -133,7 +185,13 @@ pub fn subdivision_geometry_with_mode(
     let mut holes = mesh.holes.clone();
     holes.sort_unstable();
     holes.dedup();
-    g.set_buffer(ffi::RTC_BUFFER_TYPE_HOLE, 0, ffi::RTC_FORMAT_UINT, 1, &holes)?;
+    g.set_buffer(
+        ffi::RTC_BUFFER_TYPE_HOLE,
+        0,
+        ffi::RTC_FORMAT_UINT,
+        1,
+        &holes,
+    )?;
 
     // SAFETY: valid geometry of the subdivision type.
     unsafe {

@@ -10,10 +10,17 @@ use crate::error::{Error, ErrorKind, Result};
 /// Builds (and commits) the triangle geometry of `diced`.
 pub fn triangle_geometry(device: &Device, diced: &DicedMesh) -> Result<Geometry> {
     if diced.triangles.is_empty() {
-        return Err(Error::new(ErrorKind::Usage, "the diced mesh has no triangles"));
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "the diced mesh has no triangles",
+        ));
     }
     let nv = diced.positions.len();
-    if let Some(t) = diced.triangles.iter().find(|t| t.iter().any(|&i| i as usize >= nv)) {
+    if let Some(t) = diced
+        .triangles
+        .iter()
+        .find(|t| t.iter().any(|&i| i as usize >= nv))
+    {
         return Err(Error::new(
             ErrorKind::Usage,
             format!("diced triangle {t:?} indexes beyond {nv} vertices"),
@@ -21,9 +28,21 @@ pub fn triangle_geometry(device: &Device, diced: &DicedMesh) -> Result<Geometry>
     }
     let mut g = Geometry::new(device, ffi::RTC_GEOMETRY_TYPE_TRIANGLE)?;
     let verts: Vec<f32> = diced.positions.iter().flatten().copied().collect();
-    g.set_buffer(ffi::RTC_BUFFER_TYPE_VERTEX, 0, ffi::RTC_FORMAT_FLOAT3, 3, &verts)?;
+    g.set_buffer(
+        ffi::RTC_BUFFER_TYPE_VERTEX,
+        0,
+        ffi::RTC_FORMAT_FLOAT3,
+        3,
+        &verts,
+    )?;
     let idx: Vec<u32> = diced.triangles.iter().flatten().copied().collect();
-    g.set_buffer(ffi::RTC_BUFFER_TYPE_INDEX, 0, ffi::RTC_FORMAT_UINT3, 3, &idx)?;
+    g.set_buffer(
+        ffi::RTC_BUFFER_TYPE_INDEX,
+        0,
+        ffi::RTC_FORMAT_UINT3,
+        3,
+        &idx,
+    )?;
     g.commit()?;
     Ok(g)
 }
