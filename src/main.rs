@@ -126,6 +126,12 @@ enum Command {
     },
     /// Benchmark table building and application (JSON line on stdout).
     BenchRefine(limitray::bench::RefineBenchArgs),
+    /// Cross-check the limit surface and the triangle intersector against Embree 4.
+    #[cfg(feature = "embree")]
+    Crosscheck(limitray::embree::cli::CrosscheckArgs),
+    /// Side-by-side benchmark: limitray, Embree on the same triangles, Embree subdivision.
+    #[cfg(feature = "embree")]
+    Bench(limitray::embree::cli::BenchArgs),
 }
 
 fn load(path: &Path) -> Result<ControlMesh, Error> {
@@ -265,6 +271,10 @@ fn run(cli: Cli) -> Result<(), Error> {
             println!("{line}");
             Ok(())
         }
+        #[cfg(feature = "embree")]
+        Command::Crosscheck(args) => limitray::embree::cli::run_crosscheck(&args),
+        #[cfg(feature = "embree")]
+        Command::Bench(args) => limitray::embree::cli::run_bench(&args),
     }
 }
 
