@@ -9,7 +9,7 @@
 //! and translated to [`FAR_OFFSET`] (large coordinates stress float precision).
 
 use super::crosscheck::embree_table;
-use super::rays::{self, TestRay};
+use super::rays::{self, LeakTarget, TestRay};
 use super::subdiv::{check_rate, subdivision_scene};
 use super::triangles::triangle_scene;
 use super::{Device, Scene, SceneOptions};
@@ -195,9 +195,32 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Leak-ray targets of a diced mesh: its vertices and random points on its edges, except on
-/// control faces that touch a boundary vertex of `mesh`, with unit normals.
-pub fn leak_targets(mesh: &ControlMesh, bvh: &MeshBvh, seed: u64) -> Vec<([f32; 3], [f32; 3])> {
+/// Whether the rounded point `p` lies on segment `ab` within 1e-3 of its length (far from the
+/// origin, rounding moves points on edges by a good part of a micro-triangle).
+fn on_segment(p: [f32; 3], a: [f32; 3], b: [f32; 3]) -> bool {
+    let (p, a, b) = (p.map(f64::from), a.map(f64::from), b.map(f64::from));
+    let ab: [f64; 3] = std::array::from_fn(|k| b[k] - a[k]);
+    let ap: [f64; 3] = std::array::from_fn(|k| p[k] - a[k]);
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    if len2 == 0.0 {
+        return false;
+    }
+    let c = rays::cross(ab, ap);
+    let dist2 = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / len2;
+    dist2 <= 1e-6 * len2
+}
+
+/// Leak-ray targets of a diced mesh: one vertex and one random point on one edge of every
+/// triangle, except on control faces that touch a boundary vertex (or a hole) of `mesh`.
+///
+/// Vertices are welded by position bits (infinitely sharp features duplicate vertices with the
+/// same position). For each welded vertex the cone of its triangles' unit normals is bounded:
+/// axis = normalised sum, half-angle `c` = largest angle of a normal to the axis; the target's
+/// directions may tilt `78° - c` (at most 60°) from the axis, so every triangle normal stays
+/// within 78° of the ray. Vertices whose cone is wider than 48° are skipped. An edge point
+/// uses the sum of both ends' axes and a conservative bound of the combined cone, and is kept
+/// only if its `f32` rounding leaves it within 1e-3 of the edge's length from the edge.
+pub fn leak_targets(mesh: &ControlMesh, bvh: &MeshBvh, seed: u64) -> Vec<LeakTarget> {
     let mut edge_count: HashMap<(u32, u32), u32> = HashMap::new();
     for f in 0..mesh.num_faces() {
         let fv = mesh.face(f);
@@ -213,37 +236,117 @@ pub fn leak_targets(mesh: &ControlMesh, bvh: &MeshBvh, seed: u64) -> Vec<([f32; 
             boundary[b as usize] = true;
         }
     }
-    let mut excluded = vec![false; mesh.num_faces()];
-    for f in 0..mesh.num_faces() {
-        excluded[f] = mesh.face(f).iter().any(|&v| boundary[v as usize]);
-    }
     for &h in &mesh.holes {
-        excluded[h as usize] = true;
         for &v in mesh.face(h as usize) {
-            for g in 0..mesh.num_faces() {
-                if mesh.face(g).contains(&v) {
-                    excluded[g] = true;
+            boundary[v as usize] = true;
+        }
+    }
+    let excluded: Vec<bool> = (0..mesh.num_faces())
+        .map(|f| mesh.face(f).iter().any(|&v| boundary[v as usize]))
+        .collect();
+
+    let d = &bvh.diced;
+    // Weld by position bits.
+    let key = |i: usize| d.positions[i].map(f32::to_bits);
+    let mut order: Vec<u32> = (0..d.positions.len() as u32).collect();
+    order.par_sort_unstable_by_key(|&i| key(i as usize));
+    let mut weld = vec![0u32; d.positions.len()];
+    let mut id = 0u32;
+    for (j, &i) in order.iter().enumerate() {
+        if j > 0 && key(i as usize) != key(order[j - 1] as usize) {
+            id += 1;
+        }
+        weld[i as usize] = id;
+    }
+    let nw = if order.is_empty() { 0 } else { id as usize + 1 };
+    drop(order);
+    let tri_normal = |t: &[u32; 3]| -> Option<[f64; 3]> {
+        let p = t.map(|i| d.positions[i as usize].map(|c| c as f64));
+        let n = rays::cross(
+            std::array::from_fn(|k| p[1][k] - p[0][k]),
+            std::array::from_fn(|k| p[2][k] - p[0][k]),
+        );
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        (l > 0.0).then(|| n.map(|c| c / l))
+    };
+    let normals: Vec<Option<[f64; 3]>> = d.triangles.par_iter().map(tri_normal).collect();
+    let mut axis = vec![[0.0f64; 3]; nw];
+    let mut degenerate = vec![false; nw];
+    for (t, n) in d.triangles.iter().zip(&normals) {
+        for &v in t {
+            let w = weld[v as usize] as usize;
+            match n {
+                Some(n) => {
+                    for k in 0..3 {
+                        axis[w][k] += n[k];
+                    }
                 }
+                None => degenerate[w] = true,
             }
         }
     }
-    let d = &bvh.diced;
+    for a in &mut axis {
+        let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        if l > 0.0 {
+            *a = a.map(|c| c / l);
+        }
+    }
+    // Half-angle of each cone.
+    let mut cone = vec![0.0f64; nw];
+    for (t, n) in d.triangles.iter().zip(&normals) {
+        if let Some(n) = n {
+            for &v in t {
+                let w = weld[v as usize] as usize;
+                let dot =
+                    (n[0] * axis[w][0] + n[1] * axis[w][1] + n[2] * axis[w][2]).clamp(-1.0, 1.0);
+                cone[w] = cone[w].max(dot.acos());
+            }
+        }
+    }
+    let limit = 78f64.to_radians();
+    let widest = 48f64.to_radians();
+    let angle = |a: [f64; 3], b: [f64; 3]| {
+        (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+            .clamp(-1.0, 1.0)
+            .acos()
+    };
     let mut targets = Vec::new();
     let mut rng = rays::SplitMix64::new(seed);
     for (t, info) in d.triangles.iter().zip(&d.tri_info) {
         if excluded[info.face as usize] {
             continue;
         }
-        // One vertex and one point on one edge per triangle.
         let i = rng.below(3);
         let (a, b) = (t[i] as usize, t[(i + 1) % 3] as usize);
-        targets.push((d.positions[a], d.normals[a]));
+        let (wa, wb) = (weld[a] as usize, weld[b] as usize);
         let s = rng.next_f64() as f32;
+        if degenerate[wa] || degenerate[wb] {
+            continue;
+        }
+        if cone[wa] <= widest {
+            targets.push(LeakTarget {
+                point: d.positions[a],
+                normal: axis[wa],
+                max_tilt: (limit - cone[wa]).min(60f64.to_radians()),
+            });
+        }
+        let sum: [f64; 3] = std::array::from_fn(|k| axis[wa][k] + axis[wb][k]);
+        let l = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+        if l == 0.0 {
+            continue;
+        }
+        let ax = sum.map(|c| c / l);
+        let c = (cone[wa] + angle(axis[wa], ax)).max(cone[wb] + angle(axis[wb], ax));
         let p: [f32; 3] = std::array::from_fn(|k| {
             d.positions[a][k] + s * (d.positions[b][k] - d.positions[a][k])
         });
-        let n: [f32; 3] = std::array::from_fn(|k| d.normals[a][k] + d.normals[b][k]);
-        targets.push((p, n));
+        if c <= widest && on_segment(p, d.positions[a], d.positions[b]) {
+            targets.push(LeakTarget {
+                point: p,
+                normal: ax,
+                max_tilt: (limit - c).min(60f64.to_radians()),
+            });
+        }
     }
     targets
 }
