@@ -23,6 +23,8 @@
 //! - limitray leaks nothing on rays through diced vertices and edge points (0 of 10^5,
 //!   in place and translated to (148376, 1234, −223423)).
 #![cfg(feature = "embree")]
+// Parallel arrays indexed by the same element, as in the library.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 

@@ -16,6 +16,12 @@ use crate::mesh::{ControlMesh, CreaseMethod, Options};
 use crate::patch::{PatchOptions, PatchTable};
 use rayon::prelude::*;
 
+/// Where a sample was taken: `(face, k, u, v)`.
+pub type At = (u32, u32, f64, f64);
+
+/// A distance and where it was measured.
+type Sample = (f64, At);
+
 /// Largest and mean of a set of distances, with where the largest occurred.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DistanceStats {
@@ -26,11 +32,11 @@ pub struct DistanceStats {
     /// Mean distance (relative to the diagonal).
     pub mean: f64,
     /// `(face, k, u, v)` of the largest.
-    pub worst: (u32, u32, f64, f64),
+    pub worst: At,
 }
 
 impl DistanceStats {
-    fn from_samples(samples: &[(f64, (u32, u32, f64, f64))]) -> DistanceStats {
+    fn from_samples(samples: &[Sample]) -> DistanceStats {
         let mut s = DistanceStats {
             count: samples.len(),
             ..DistanceStats::default()
@@ -156,7 +162,7 @@ pub fn interpolation_check_with(
 
     // Random parameters.
     let mut rng = SplitMix64::new(seed);
-    let params: Vec<(u32, u32, f64, f64)> = if faces.is_empty() {
+    let params: Vec<At> = if faces.is_empty() {
         Vec::new()
     } else {
         (0..samples)
@@ -167,7 +173,7 @@ pub fn interpolation_check_with(
             })
             .collect()
     };
-    let param_d: Vec<(f64, (u32, u32, f64, f64))> = params
+    let param_d: Vec<Sample> = params
         .par_iter()
         .filter_map(|&(f, k, u, v)| {
             let exact = table.eval(f as usize, k as usize, u, v).ok()?;
@@ -188,7 +194,7 @@ pub fn interpolation_check_with(
                 .map(|h| (*r, h))
         })
         .collect();
-    let hit_d: Vec<((f64, (u32, u32, f64, f64)), (f64, (u32, u32, f64, f64)))> = hits
+    let hit_d: Vec<(Sample, Sample)> = hits
         .par_iter()
         .filter_map(|(r, h)| {
             let f = h.prim_id;
@@ -541,7 +547,7 @@ pub fn surface_check_with(
     seed: u64,
 ) -> Result<SurfaceReport> {
     let diag = mesh.diagonal().max(f64::MIN_POSITIVE);
-    let pairs: Vec<(bool, bool, Option<(f64, (u32, u32, f64, f64))>, bool)> = rays
+    let pairs: Vec<(bool, bool, Option<Sample>, bool)> = rays
         .par_iter()
         .with_min_len(256)
         .map(|r| {

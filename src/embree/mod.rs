@@ -204,7 +204,7 @@ impl Geometry {
         if data.is_empty() {
             return Ok(());
         }
-        if components == 0 || data.len() % components != 0 {
+        if components == 0 || !data.len().is_multiple_of(components) {
             return Err(Error::new(
                 ErrorKind::Usage,
                 "Embree buffer length is not a multiple of the item size",
