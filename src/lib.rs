@@ -11,6 +11,7 @@
 pub mod bench;
 pub mod bvh;
 pub mod cli_eval;
+pub mod cli_trace;
 pub mod dice;
 #[cfg(feature = "embree")]
 pub mod embree;
@@ -18,6 +19,7 @@ pub mod error;
 pub mod info;
 pub mod mesh;
 pub mod patch;
+pub mod probe;
 pub mod refine;
 
 pub use error::{Error, ErrorKind, Result};
