@@ -1,5 +1,6 @@
 //! Side-by-side benchmark: limitray (patch table + dicing + CWBVH), Embree on the same
-//! triangles, and Embree's own subdivision geometry at the same rate, on the same rays.
+//! triangles, and Embree's own subdivision geometry at the same rate, on the same rays (plus
+//! Embree's triangles with `RTC_SCENE_FLAG_ROBUST`, for the leak counts).
 //!
 //! Every engine is timed inside one rayon pool of `threads` threads (Embree's build threads
 //! limited to the same number through its device configuration); timings are medians of
@@ -57,7 +58,8 @@ impl Default for BenchOptions {
 /// Results of one engine.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EngineResult {
-    /// `limitray`, `embree-triangles` or `embree-subdiv`.
+    /// `limitray`, `embree-triangles`, `embree-subdiv` or `embree-tri-robust` (the same
+    /// triangles with `RTC_SCENE_FLAG_ROBUST`).
     pub name: &'static str,
     /// Median build time in seconds (for limitray: patch table + dicing + BVH; for Embree
     /// triangles: scene from the already diced triangles; for Embree subdivision: geometry
@@ -94,7 +96,7 @@ pub struct BenchReport {
     pub leak_rays: usize,
     /// Embree version.
     pub embree_version: u32,
-    /// limitray, Embree triangles, Embree subdivision.
+    /// limitray, Embree triangles, Embree subdivision, Embree robust triangles.
     pub engines: Vec<EngineResult>,
 }
 
@@ -396,14 +398,16 @@ fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
 struct Built {
     bvh: MeshBvh,
     tris: Scene,
+    robust: Scene,
     sub: Scene,
-    /// Seconds per repetition: patch table, dicing, BVH, Embree triangles, Embree subdivision.
-    parts: [Vec<f64>; 5],
+    /// Seconds per repetition: patch table, dicing, BVH, Embree triangles, Embree subdivision,
+    /// Embree triangles with `RTC_SCENE_FLAG_ROBUST`.
+    parts: [Vec<f64>; 6],
 }
 
 fn build_all(mesh: &ControlMesh, rate: u32, device: &Device, reps: usize) -> Result<Built> {
-    let mut parts: [Vec<f64>; 5] = Default::default();
-    let mut last: Option<(MeshBvh, Scene, Scene)> = None;
+    let mut parts: [Vec<f64>; 6] = Default::default();
+    let mut last: Option<(MeshBvh, Scene, Scene, Scene)> = None;
     for _ in 0..reps.max(1) {
         // Free the previous repetition first: peak memory stays at one copy.
         drop(last.take());
@@ -432,18 +436,28 @@ fn build_all(mesh: &ControlMesh, rate: u32, device: &Device, reps: usize) -> Res
             SceneOptions::default(),
         )?;
         let t5 = Instant::now();
-        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
+        let robust = triangle_scene(
+            device,
+            &bvh.diced,
+            SceneOptions {
+                robust: true,
+                ..SceneOptions::default()
+            },
+        )?;
+        let t6 = Instant::now();
+        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5), (t5, t6)]
             .into_iter()
             .enumerate()
         {
             parts[i].push((b - a).as_secs_f64());
         }
-        last = Some((bvh, tris, sub));
+        last = Some((bvh, tris, sub, robust));
     }
-    let (bvh, tris, sub) = last.expect("at least one repetition");
+    let (bvh, tris, sub, robust) = last.expect("at least one repetition");
     Ok(Built {
         bvh,
         tris,
+        robust,
         sub,
         parts,
     })
@@ -498,11 +512,17 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         ),
         (med(3), vec![]),
         (med(4), vec![]),
+        (med(5), vec![]),
     ];
-    let names = ["limitray", "embree-triangles", "embree-subdiv"];
+    let names = [
+        "limitray",
+        "embree-triangles",
+        "embree-subdiv",
+        "embree-tri-robust",
+    ];
     let mut results = Vec::new();
     {
-        let engines: [&dyn Engine; 3] = [&built.bvh, &built.tris, &built.sub];
+        let engines: [&dyn Engine; 4] = [&built.bvh, &built.tris, &built.sub, &built.robust];
         for ((name, engine), (build_s, parts)) in names.into_iter().zip(engines).zip(builds) {
             let (coh, coh_hits) = throughput(engine, &coherent, opts.reps);
             let (inc, inc_hits) = throughput(engine, &incoherent, opts.reps);
@@ -533,7 +553,12 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     let far_built = build_all(&far, opts.rate, &device, 1)?;
     let far_targets = leak_targets(&far, &far_built.bvh, opts.seed);
     let far_rays = rays::towards_points(&far_targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
-    let far_engines: [&dyn Engine; 3] = [&far_built.bvh, &far_built.tris, &far_built.sub];
+    let far_engines: [&dyn Engine; 4] = [
+        &far_built.bvh,
+        &far_built.tris,
+        &far_built.sub,
+        &far_built.robust,
+    ];
     for (r, engine) in results.iter_mut().zip(far_engines) {
         r.leaks_far = leaks(engine, &far_rays);
     }

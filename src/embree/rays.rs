@@ -91,14 +91,14 @@ pub fn incoherent(bounds: [[f64; 3]; 2], n: usize, seed: u64) -> Vec<TestRay> {
 
 /// Primary rays of a pinhole camera, row by row (coherent): `width × height` pixels, 40° vertical
 /// field of view, looking at the centre of `bounds` from direction `(1, 0.6, 1.4)` (normalised)
-/// at 1.4 diagonals, so the object fills most of the frame.
+/// at one diagonal, so the object fills most of the frame.
 pub fn camera(bounds: [[f64; 3]; 2], width: usize, height: usize) -> Vec<TestRay> {
     let (c, diag) = centre_and_diagonal(bounds);
     let back = normalise([1.0, 0.6, 1.4]);
     let eye = [
-        c[0] + 1.4 * diag * back[0],
-        c[1] + 1.4 * diag * back[1],
-        c[2] + 1.4 * diag * back[2],
+        c[0] + diag * back[0],
+        c[1] + diag * back[1],
+        c[2] + diag * back[2],
     ];
     let fwd = [-back[0], -back[1], -back[2]];
     let up0 = [0.0, 1.0, 0.0];
