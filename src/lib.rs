@@ -13,6 +13,8 @@ pub mod bvh;
 pub mod cli_eval;
 pub mod cli_trace;
 pub mod dice;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod error;
 pub mod gpu;
 pub mod info;
