@@ -37,6 +37,10 @@ struct Params {
     // Kernel-specific.
     user0: u32,
     user1: u32,
+    user2: u32,
+    user3: u32,
+    user4: u32,
+    user5: u32,
 }
 
 @group(0) @binding(0) var<uniform> P: Params;
@@ -284,7 +288,8 @@ var<private> iters: u32;
 var<private> overflow: bool;
 
 // Closest hit in mesh record `m` (MeshBvh::intersect): lowest leaf index on equal t.
-fn intersect_mesh(m: u32, r: PRay) -> MeshHit {
+// With `any`, the first hit found ends the traversal (MeshBvh::occluded).
+fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
     var best = MeshHit(false, 0u, 0.0, 0.0, 0.0);
     let rec = P.mesh_off + 4u * m;
     let node_off = gw(rec);
@@ -315,6 +320,9 @@ fn intersect_mesh(m: u32, r: PRay) -> MeshHit {
             let h = intersect_triangle(r, a, b, c, tmax);
             if (h.hit && (!best.hit || h.t < best.t || (h.t == best.t && li < best.leaf))) {
                 best = MeshHit(true, li, h.t, h.b1, h.b2);
+                if (anyhit) {
+                    return best;
+                }
                 tmax = h.t;
             }
         }
@@ -378,12 +386,13 @@ fn inst_vec(base: u32, v: vec3<f32>, point: bool) -> vec3<f32> {
     return res;
 }
 
-// Closest hit of a world ray (SceneBvh::intersect, or MeshBvh::intersect in mode 0).
-fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32) -> SceneResult {
+// Closest hit of a world ray (SceneBvh::intersect, or MeshBvh::intersect in mode 0); with
+// `any`, the first hit found (SceneBvh::occluded).
+fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32, anyhit: bool) -> SceneResult {
     var best = SceneResult(false, 0u, 0u, 0.0, 0.0, 0.0);
     let r = prepare_ray(o, d, tmin, tmax0);
     if (P.mode == 0u) {
-        let h = intersect_mesh(0u, r);
+        let h = intersect_mesh(0u, r, anyhit);
         return SceneResult(h.hit, 0u, h.leaf, h.t, h.b1, h.b2);
     }
     if (P.top_node_count == 0u || !r.ok) {
@@ -408,9 +417,12 @@ fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32) -> SceneRe
             let m = gw(ib);
             let oo = inst_vec(ib + 4u, o, true);
             let od = inst_vec(ib + 4u, d, false);
-            let h = intersect_mesh(m, prepare_ray(oo, od, tmin, tmax));
+            let h = intersect_mesh(m, prepare_ray(oo, od, tmin, tmax), anyhit);
             if (h.hit && (!best.hit || h.t < best.t || (h.t == best.t && i < best.inst))) {
                 best = SceneResult(true, i, h.leaf, h.t, h.b1, h.b2);
+                if (anyhit) {
+                    return best;
+                }
                 tmax = h.t;
             }
         }

@@ -19,7 +19,7 @@ fn trace_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let b = 8u * i;
     let o = vec3<f32>(rays[b], rays[b + 1u], rays[b + 2u]);
     let d = vec3<f32>(rays[b + 4u], rays[b + 5u], rays[b + 6u]);
-    let h = intersect_world(o, d, rays[b + 3u], rays[b + 7u]);
+    let h = intersect_world(o, d, rays[b + 3u], rays[b + 7u], false);
     var status = select(0u, 1u, h.hit);
     if (overflow) {
         status = 2u;

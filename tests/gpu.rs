@@ -418,3 +418,13 @@ fn cli_trace_gpu_prints_what_the_cpu_prints() {
     assert!(cpu.lines().filter(|l| l.starts_with("hit ")).count() > 100);
     assert_eq!(gpu, cpu);
 }
+
+#[test]
+fn path_kernels_compile() {
+    let Some(ctx) = ctx() else { return };
+    for used in [1, 3] {
+        if let Err(e) = limitray::gpu::render::PathKernels::new(&ctx, used) {
+            panic!("{e}");
+        }
+    }
+}

@@ -11,6 +11,7 @@ pub mod cli;
 pub mod device;
 pub mod exact;
 pub mod geometry;
+pub mod render;
 pub mod trace;
 
 pub use device::{adapters, context_for_tests, GpuContext};

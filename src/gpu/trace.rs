@@ -47,6 +47,14 @@ pub struct Params {
     pub user0: u32,
     /// Kernel-specific.
     pub user1: u32,
+    /// Kernel-specific.
+    pub user2: u32,
+    /// Kernel-specific.
+    pub user3: u32,
+    /// Kernel-specific.
+    pub user4: u32,
+    /// Kernel-specific.
+    pub user5: u32,
 }
 
 impl Params {
@@ -65,6 +73,10 @@ impl Params {
             box_scale: 1.0 + 2.0 * crate::bvh::triangle::GAMMA3,
             user0: 0,
             user1: 0,
+            user2: 0,
+            user3: 0,
+            user4: 0,
+            user5: 0,
         }
     }
 }
