@@ -3,6 +3,7 @@
 
 mod builder;
 pub mod generate;
+pub mod shapes;
 pub mod obj;
 pub mod topology;
 
