@@ -296,7 +296,7 @@ pub fn eval_bench(
         let points = pool.install(|| eval_batch(&table, &queries))?;
         times.push(ms_since(t0));
         let c = std::hint::black_box(checksum(&points));
-        debug_assert!(sum.map_or(true, |s: f64| s.to_bits() == c.to_bits()));
+        debug_assert!(sum.is_none_or(|s: f64| s.to_bits() == c.to_bits()));
         sum = Some(c);
     }
     let eval_ms = median(&mut times);

@@ -2,13 +2,16 @@
 //!
 //! The pipeline runs one way, one stage per module:
 //! [`mesh`] (control mesh, tags, validated topology) → [`refine`] (subdivision rules, stencil
-//! tables, limit masks) → patches → dicing → BVH → rendering.
+//! tables, limit masks) → [`patch`] (feature-adaptive patch table, exact evaluation) →
+//! [`dice`] (crack-free limit-surface triangles) → [`bvh`] (watertight ray queries) → rendering.
 #![warn(missing_docs)]
 // Mesh code indexes several parallel arrays by the same element index; range loops say so.
 #![allow(clippy::needless_range_loop)]
 
 pub mod bench;
+pub mod bvh;
 pub mod cli_eval;
+pub mod dice;
 pub mod error;
 pub mod info;
 pub mod mesh;

@@ -623,7 +623,7 @@ impl Parser {
         strings: &[&str],
     ) -> Result<()> {
         self.unused(line, el, &[strings]);
-        if ints.is_empty() || ints.len() % 2 != 0 {
+        if ints.is_empty() || !ints.len().is_multiple_of(2) {
             return Err(self.err(
                 line,
                 el,

@@ -296,7 +296,7 @@ pub fn crease_parameter(crease_edge: usize, u: f64, v: f64) -> f64 {
 /// along `v` through the control rows.
 #[inline]
 fn across_is_v(crease_edge: usize) -> bool {
-    crease_edge % 2 == 0
+    crease_edge.is_multiple_of(2)
 }
 
 /// True when the curve parameter runs against the patch parameter (edges 0 and 3).

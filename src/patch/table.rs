@@ -161,6 +161,8 @@ pub struct PatchTable {
     end_caps: Vec<CapMesh>,
     /// Crease rule.
     pub method: CreaseMethod,
+    /// Subdivision options the table was built with (boundary mode, crease rule).
+    pub mesh_options: Options,
     /// Options used.
     pub options: PatchOptions,
     /// Build statistics.
@@ -370,6 +372,7 @@ impl PatchTable {
             points: Vec::new(),
             end_caps: Vec::new(),
             method,
+            mesh_options: options,
             options: opts,
             stats: PatchStats::default(),
         };

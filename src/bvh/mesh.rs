@@ -1,0 +1,372 @@
+//! One diced mesh in an obvhs compressed wide BVH (CWBVH, 8 children per 80-byte node),
+//! traversed with a conservative box test and the watertight triangle test.
+//!
+//! obvhs quantises child boxes to 8 bits per plane, rounding in `f32`; its own traversal also
+//! clamps `t` to `1e-4`. Neither is acceptable for a leak-free guarantee, so after building,
+//! every quantised child box is checked against the exact bounds of what lies below it, as the
+//! traversal decodes it (`p + 2^e · q`, rounded as the traversal rounds), and widened by
+//! whole quantisation steps where rounding left a vertex outside. Traversal is then this
+//! module's own, over obvhs's node layout and child ordering.
+
+use super::ray::{Hit, Ray};
+use super::triangle::{intersect_prepared, PreparedRay};
+use crate::dice::DicedMesh;
+use glam::{UVec2, Vec3A};
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::node::{extract_byte64, CwBvhNode};
+use obvhs::cwbvh::CwBvh;
+use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
+use rayon::prelude::*;
+
+/// A diced mesh with its BVH.
+#[derive(Clone, Debug)]
+pub struct MeshBvh {
+    /// The diced mesh (attributes of hits).
+    pub diced: DicedMesh,
+    /// obvhs's compressed wide BVH (root = node 0) with boxes made conservative.
+    pub cwbvh: CwBvh,
+    /// Triangle corners in BVH leaf order.
+    pub tri_verts: Vec<[[f32; 3]; 3]>,
+    /// BVH leaf order → [`DicedMesh::triangles`] index.
+    pub tri_index: Vec<u32>,
+    /// Number of child planes that had to be widened after quantisation.
+    pub widened_planes: usize,
+}
+
+struct TriBox([[f32; 3]; 3]);
+
+impl Boundable for TriBox {
+    fn aabb(&self) -> Aabb {
+        let [a, b, c] = self.0;
+        let lo = Vec3A::new(
+            a[0].min(b[0]).min(c[0]),
+            a[1].min(b[1]).min(c[1]),
+            a[2].min(b[2]).min(c[2]),
+        );
+        let hi = Vec3A::new(
+            a[0].max(b[0]).max(c[0]),
+            a[1].max(b[1]).max(c[1]),
+            a[2].max(b[2]).max(c[2]),
+        );
+        Aabb::new(lo, hi)
+    }
+}
+
+/// Decoded bounds of child `c` of `node`, exactly as the traversal computes them.
+#[inline(always)]
+pub(crate) fn child_box(node: &CwBvhNode, c: usize) -> ([f32; 3], [f32; 3]) {
+    let e = node.compute_extent();
+    let p = node.p;
+    (
+        [
+            p.x + e.x * node.child_min_x[c] as f32,
+            p.y + e.y * node.child_min_y[c] as f32,
+            p.z + e.z * node.child_min_z[c] as f32,
+        ],
+        [
+            p.x + e.x * node.child_max_x[c] as f32,
+            p.y + e.y * node.child_max_y[c] as f32,
+            p.z + e.z * node.child_max_z[c] as f32,
+        ],
+    )
+}
+
+type Bounds = ([f32; 3], [f32; 3]);
+
+fn union(a: Bounds, b: Bounds) -> Bounds {
+    (
+        std::array::from_fn(|i| a.0[i].min(b.0[i])),
+        std::array::from_fn(|i| a.1[i].max(b.1[i])),
+    )
+}
+
+const EMPTY: Bounds = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+
+impl MeshBvh {
+    /// Builds the BVH of `diced`.
+    pub fn build(diced: DicedMesh) -> MeshBvh {
+        let prims: Vec<TriBox> = diced
+            .triangles
+            .iter()
+            .map(|t| TriBox(t.map(|i| diced.positions[i as usize])))
+            .collect();
+        if prims.is_empty() {
+            return MeshBvh {
+                diced,
+                cwbvh: CwBvh::default(),
+                tri_verts: Vec::new(),
+                tri_index: Vec::new(),
+                widened_planes: 0,
+            };
+        }
+        let mut params = BvhBuildParams::medium_build();
+        params.pre_split = false;
+        let mut cwbvh = build_cwbvh(&prims, params, &mut std::time::Duration::default());
+        let tri_index = cwbvh.primitive_indices.clone();
+        let tri_verts: Vec<[[f32; 3]; 3]> =
+            tri_index.iter().map(|&i| prims[i as usize].0).collect();
+        let widened_planes = make_conservative(&mut cwbvh, &tri_verts);
+        MeshBvh {
+            diced,
+            cwbvh,
+            tri_verts,
+            tri_index,
+            widened_planes,
+        }
+    }
+
+    /// Memory of the BVH and the triangle data, in bytes (the diced mesh included).
+    pub fn bytes(&self) -> usize {
+        self.cwbvh.nodes.len() * std::mem::size_of::<CwBvhNode>()
+            + self.cwbvh.primitive_indices.len() * 4
+            + self.tri_verts.len() * 36
+            + self.tri_index.len() * 4
+            + self.diced.bytes()
+    }
+
+    /// Bounds of the mesh.
+    pub fn bounds(&self) -> [[f32; 3]; 2] {
+        self.diced.bounds()
+    }
+
+    /// Traverses with `ray`, calling `leaf(prepared_ray, leaf_index, tmax)` for each
+    /// triangle whose leaf box is met; `leaf` returns the new `tmax` and whether to stop.
+    #[inline(always)]
+    fn traverse(&self, r: &PreparedRay, mut leaf: impl FnMut(usize, f32) -> (f32, bool)) {
+        if self.cwbvh.nodes.is_empty() {
+            return;
+        }
+        let mut tmax = r.tmax;
+        let mut state = self.cwbvh.new_traversal(Vec3A::from(r.d));
+        let mut node: &CwBvhNode;
+        let mut stop = false;
+        obvhs::traverse!(
+            self.cwbvh,
+            node,
+            state,
+            node_hitmask(node, r, state.oct_inv4, tmax),
+            {
+                let (t, s) = leaf(state.primitive_id as usize, tmax);
+                tmax = t;
+                if s {
+                    stop = true;
+                    break;
+                }
+            }
+        );
+        let _ = stop;
+    }
+
+    /// Closest hit of `ray` in `[tmin, tmax]`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let r = PreparedRay::new(ray)?;
+        let mut best: Option<(usize, f32, f32, f32)> = None;
+        self.traverse(&r, |li, tmax| {
+            let [a, b, c] = self.tri_verts[li];
+            if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
+                // Equal t keeps the first; any is correct.
+                if best.is_none_or(|x| t < x.1) {
+                    best = Some((li, t, b1, b2));
+                    return (t, false);
+                }
+            }
+            (tmax, false)
+        });
+        best.map(|(li, t, b1, b2)| self.hit(li, t, b1, b2))
+    }
+
+    /// True if anything is hit in `[tmin, tmax]`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        let Some(r) = PreparedRay::new(ray) else {
+            return false;
+        };
+        let mut hit = false;
+        self.traverse(&r, |li, tmax| {
+            let [a, b, c] = self.tri_verts[li];
+            if intersect_prepared(&r, a, b, c, tmax).is_some() {
+                hit = true;
+                return (tmax, true);
+            }
+            (tmax, false)
+        });
+        hit
+    }
+
+    /// Closest hits of many rays, in parallel.
+    pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        rays.par_iter()
+            .with_min_len(256)
+            .map(|r| self.intersect(r))
+            .collect()
+    }
+
+    /// The hit record of leaf triangle `li` at `t` with barycentrics `b1, b2`.
+    pub fn hit(&self, li: usize, t: f32, b1: f32, b2: f32) -> Hit {
+        let tri = self.tri_index[li];
+        let [a, b, c] = self.tri_verts[li];
+        let info = &self.diced.tri_info[tri as usize];
+        let idx = self.diced.triangles[tri as usize];
+        let b0 = 1.0 - b1 - b2;
+        let u = b0 * info.uv[0][0] + b1 * info.uv[1][0] + b2 * info.uv[2][0];
+        let v = b0 * info.uv[0][1] + b1 * info.uv[1][1] + b2 * info.uv[2][1];
+        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let ng = normalize([
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ]);
+        let n = idx.map(|i| self.diced.normals[i as usize]);
+        let ns = normalize(std::array::from_fn(|i| {
+            b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]
+        }));
+        Hit {
+            t,
+            triangle: tri,
+            face: info.face,
+            k: info.k as u32,
+            u,
+            v,
+            b1,
+            b2,
+            ng,
+            ns: if ns.iter().all(|x| x.is_finite()) {
+                ns
+            } else {
+                ng
+            },
+            level: info.level,
+        }
+    }
+}
+
+/// Normalises `v` (zero stays zero).
+pub fn normalize(v: [f32; 3]) -> [f32; 3] {
+    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if l > 0.0 {
+        [v[0] / l, v[1] / l, v[2] / l]
+    } else {
+        v
+    }
+}
+
+/// The obvhs hit mask of `node`'s children met by `r` (conservatively) within `tmax`.
+#[inline(always)]
+pub(crate) fn node_hitmask(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut mask = 0u32;
+    for c in 0..8 {
+        if node.child_meta[c] == 0 {
+            continue;
+        }
+        let (lo, hi) = child_box(node, c);
+        if r.hits_box(lo, hi, tmax) {
+            mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
+        }
+    }
+    mask
+}
+
+/// Widens quantised child boxes until, as decoded, they contain everything below them.
+/// Returns the number of planes moved.
+pub(crate) fn make_conservative(bvh: &mut CwBvh, tri_verts: &[[[f32; 3]; 3]]) -> usize {
+    let n = bvh.nodes.len();
+    let mut content = vec![EMPTY; n];
+    let mut widened = 0;
+    for i in (0..n).rev() {
+        let mut node = bvh.nodes[i];
+        let mut wants = [EMPTY; 8];
+        for c in 0..8 {
+            if node.child_meta[c] == 0 {
+                continue;
+            }
+            wants[c] = if node.is_leaf(c) {
+                let (start, count) = node.child_primitives(c);
+                let mut b = EMPTY;
+                for li in start..start + count {
+                    for v in tri_verts[li as usize] {
+                        b = union(b, (v, v));
+                    }
+                }
+                b
+            } else {
+                let ci = node.child_node_index(c) as usize;
+                assert!(ci > i, "CWBVH children follow their parents");
+                content[ci]
+            };
+        }
+        loop {
+            let mut ok = true;
+            for c in 0..8 {
+                if node.child_meta[c] != 0 {
+                    match widen(&mut node, c, wants[c]) {
+                        Some(m) => widened += m,
+                        None => ok = false,
+                    }
+                }
+            }
+            if ok {
+                break;
+            }
+            // The node's frame does not reach: double its quantisation step and requantise.
+            for a in 0..3 {
+                node.e[a] += 1;
+            }
+            for q in [
+                &mut node.child_min_x,
+                &mut node.child_min_y,
+                &mut node.child_min_z,
+            ] {
+                q.iter_mut().for_each(|x| *x /= 2);
+            }
+            for q in [
+                &mut node.child_max_x,
+                &mut node.child_max_y,
+                &mut node.child_max_z,
+            ] {
+                q.iter_mut().for_each(|x| *x = x.div_ceil(2));
+            }
+        }
+        bvh.nodes[i] = node;
+        content[i] = wants.iter().fold(EMPTY, |a, &b| union(a, b));
+    }
+    widened
+}
+
+/// Moves the planes of child `c` outwards until its decoded box contains `want`; `None` if a
+/// plane reaches the end of the node's frame first.
+fn widen(node: &mut CwBvhNode, c: usize, want: Bounds) -> Option<usize> {
+    let mut moved = 0;
+    loop {
+        let (lo, hi) = child_box(node, c);
+        let mut changed = false;
+        let planes: [(&mut [u8; 8], bool, bool); 6] = [
+            (&mut node.child_min_x, lo[0] > want.0[0], false),
+            (&mut node.child_max_x, hi[0] < want.1[0], true),
+            (&mut node.child_min_y, lo[1] > want.0[1], false),
+            (&mut node.child_max_y, hi[1] < want.1[1], true),
+            (&mut node.child_min_z, lo[2] > want.0[2], false),
+            (&mut node.child_max_z, hi[2] < want.1[2], true),
+        ];
+        for (q, outside, upper) in planes {
+            if outside {
+                if upper && q[c] < 255 {
+                    q[c] += 1;
+                } else if !upper && q[c] > 0 {
+                    q[c] -= 1;
+                } else {
+                    return None;
+                }
+                changed = true;
+            }
+        }
+        if !changed {
+            return Some(moved);
+        }
+        moved += 1;
+    }
+}
+
+// `UVec2` is named by obvhs's traversal macro.
+#[allow(dead_code)]
+type TraversalGroup = UVec2;

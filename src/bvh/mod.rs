@@ -1,0 +1,15 @@
+//! Ray queries against diced limit surfaces: an obvhs CWBVH per diced mesh ([`mesh`]) with
+//! the watertight ray/triangle test and conservative box tests ([`triangle`]), instances under
+//! a top-level hierarchy ([`scene`]), and refinement of a hit onto the exact limit surface
+//! ([`exact`]).
+
+pub mod exact;
+pub mod mesh;
+pub mod ray;
+pub mod scene;
+pub mod triangle;
+
+pub use mesh::MeshBvh;
+pub use ray::{Hit, Ray};
+pub use scene::{SceneBvh, SceneHit};
+pub use triangle::intersect_triangle;

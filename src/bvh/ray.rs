@@ -1,0 +1,56 @@
+//! Rays and hits.
+
+/// A ray `origin + t·dir`, `t ∈ [tmin, tmax]`. `dir` need not be unit length; `t` is in units
+/// of `dir`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Origin.
+    pub origin: [f32; 3],
+    /// Direction (not necessarily normalised; must not be zero).
+    pub dir: [f32; 3],
+    /// Smallest accepted `t`.
+    pub tmin: f32,
+    /// Largest accepted `t`.
+    pub tmax: f32,
+}
+
+impl Ray {
+    /// A ray over `[0, ∞)`.
+    pub fn new(origin: [f32; 3], dir: [f32; 3]) -> Ray {
+        Ray {
+            origin,
+            dir,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        }
+    }
+}
+
+/// Where a ray meets a diced mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Triangle of the diced mesh ([`crate::dice::DicedMesh::triangles`] index).
+    pub triangle: u32,
+    /// Base (control-mesh) face.
+    pub face: u32,
+    /// Sub-face of an n-gon (0 for quads).
+    pub k: u32,
+    /// `(u, v)` in the (sub-)face's parameterisation, interpolated from the diced vertices.
+    pub u: f32,
+    /// See `u`.
+    pub v: f32,
+    /// Barycentric coordinates of the hit in the triangle: weight of corner 1 and corner 2
+    /// (corner 0 has `1 - b1 - b2`).
+    pub b1: f32,
+    /// See `b1`.
+    pub b2: f32,
+    /// Unit geometric normal of the triangle (winding order of the control faces, outward for
+    /// counter-clockwise faces), in the space of the ray.
+    pub ng: [f32; 3],
+    /// Unit shading normal: the limit-surface normal interpolated across the triangle.
+    pub ns: [f32; 3],
+    /// Subdivision level of the patch at the hit (0 = a base-face B-spline patch).
+    pub level: u8,
+}

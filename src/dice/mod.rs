@@ -1,0 +1,482 @@
+//! Dicing: the limit surface as a crack-free triangle mesh whose vertices lie exactly on it
+//! (paper 001 §4–5, §7).
+//!
+//! The unit of dicing is a *domain*: a quad base face, or one sub-face of an n-gon (which is a
+//! level-1 face, so its rate is halved, paper 001 §7). Every domain is a unit square in its
+//! ptex parameters; its interior is a regular grid evaluated with the exact patch table
+//! ([`crate::patch::PatchTable::eval`]), so every patch inside a domain at level `l` gets
+//! `rate / 2^l` segments per edge (and patches smaller than one micro-triangle share their
+//! ancestor's, instead of forcing a vertex of their own). Sides carry their own rates and are
+//! stitched to the grid ([`pattern`]).
+//!
+//! Watertightness is structural: every point on a side of a domain — base vertices, samples on
+//! control edges, n-gon centres and the samples on the spokes between sub-faces — is evaluated
+//! once and stored once, and both domains that share it use the same vertex index. The two
+//! sides of an edge therefore agree bit for bit and no T-junction exists: the sample count of a
+//! shared side is a property of the edge, not of the domain. Only at infinitely sharp features
+//! (sharp creases, corners, non-manifold edges), where the two sides have different normals,
+//! does a side vertex get a copy per domain: the copy's position is the same `f32` bits.
+
+mod pattern;
+mod rates;
+
+pub use pattern::{pattern, side_uv, Pattern};
+pub use rates::{edge_rates, DiceRate, ScreenRate};
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::mesh::ControlMesh;
+use crate::patch::PatchTable;
+use crate::refine::crease;
+use crate::refine::Level;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Options of [`dice`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiceOptions {
+    /// How many segments each edge gets.
+    pub rate: DiceRate,
+    /// Upper bound on the segments of one edge.
+    pub max_rate: u32,
+}
+
+impl Default for DiceOptions {
+    fn default() -> Self {
+        DiceOptions {
+            rate: DiceRate::Uniform(4),
+            max_rate: 256,
+        }
+    }
+}
+
+/// Per-triangle attributes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriInfo {
+    /// Base face.
+    pub face: u32,
+    /// Sub-face (0 for quads).
+    pub k: u8,
+    /// Level of the patch at the triangle's centroid.
+    pub level: u8,
+    /// `(u, v)` of the three corners in `(face, k)`'s parameterisation.
+    pub uv: [[f32; 2]; 3],
+}
+
+/// A diced limit surface.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DicedMesh {
+    /// Limit-surface points (object space), rounded once from `f64` evaluation.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit limit normals.
+    pub normals: Vec<[f32; 3]>,
+    /// `(face, k, u, v)` of each vertex in the domain that evaluated it.
+    pub params: Vec<(u32, u8, f32, f32)>,
+    /// Triangles, counter-clockwise as the control faces.
+    pub triangles: Vec<[u32; 3]>,
+    /// Attributes of each triangle.
+    pub tri_info: Vec<TriInfo>,
+}
+
+impl DicedMesh {
+    /// Memory used, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.positions.len() * 12
+            + self.normals.len() * 12
+            + self.params.len() * std::mem::size_of::<(u32, u8, f32, f32)>()
+            + self.triangles.len() * 12
+            + self.tri_info.len() * std::mem::size_of::<TriInfo>()
+    }
+
+    /// Axis-aligned bounds of the vertices (`[max, min]` inverted when empty).
+    pub fn bounds(&self) -> [[f32; 3]; 2] {
+        let mut b = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+        for p in &self.positions {
+            for i in 0..3 {
+                b[0][i] = b[0][i].min(p[i]);
+                b[1][i] = b[1][i].max(p[i]);
+            }
+        }
+        b
+    }
+}
+
+/// A point evaluated on the limit surface.
+#[derive(Clone, Copy, Debug)]
+struct Point {
+    p: [f32; 3],
+    n: [f32; 3],
+    param: (u32, u8, f32, f32),
+}
+
+/// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
+/// vanishes (corners of boundary faces, crease ends), the normal is taken a little inside the
+/// domain.
+fn eval_point(table: &PatchTable, face: u32, k: u8, u: f64, v: f64) -> Result<Point> {
+    let s = table.eval(face as usize, k as usize, u, v)?;
+    let mut n = cross(s.du, s.dv);
+    let scale = norm(s.du) * norm(s.dv);
+    if norm(n).is_nan() || norm(n) <= 1e-10 * scale {
+        let (u2, v2) = (u + (0.5 - u) * 1e-4, v + (0.5 - v) * 1e-4);
+        let s2 = table.eval(face as usize, k as usize, u2, v2)?;
+        n = cross(s2.du, s2.dv);
+    }
+    let l = norm(n);
+    let n = if l > 0.0 && l.is_finite() {
+        [n[0] / l, n[1] / l, n[2] / l]
+    } else {
+        [0.0, 0.0, 1.0]
+    };
+    Ok(Point {
+        p: s.p.map(|x| x as f32),
+        n: n.map(|x| x as f32),
+        param: (face, k, u as f32, v as f32),
+    })
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+/// The point at fraction `t ∈ [0, 1]` along face edge `m` of face `f` (from its vertex `m`
+/// to vertex `m + 1`), as `(k, u, v)` in that face's domains.
+pub fn face_edge_param(n: usize, m: usize, t: f64) -> (u8, f64, f64) {
+    if n == 4 {
+        let [u, v] = side_uv(m, t);
+        (0, u, v)
+    } else if t <= 0.5 {
+        (m as u8, 2.0 * t, 0.0)
+    } else {
+        (((m + 1) % n) as u8, 0.0, 2.0 - 2.0 * t)
+    }
+}
+
+/// Shared vertices and the layout of the diced mesh's first part.
+struct Shared {
+    points: Vec<Point>,
+    /// Index of each base vertex's point (`u32::MAX` if no live face uses it).
+    vertex: Vec<u32>,
+    /// First index of each edge's interior samples (`r_e - 1` of them, from `edge_verts[0]`).
+    edge_first: Vec<u32>,
+    /// Index of each n-gon's centre point.
+    centre: Vec<u32>,
+    /// First index of each n-gon spoke's interior samples, per face-vertex slot.
+    spoke_first: Vec<u32>,
+}
+
+/// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles.
+pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
+    let (level, _) = Level::base(mesh, &table.mesh_options)?;
+    if table.num_faces() != level.num_faces() {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "the patch table was built from another mesh",
+        ));
+    }
+    let topo = &level.topo;
+    let live = |f: usize| !level.face_hole[f];
+    let rates = edge_rates(table, &level, opts)?;
+
+    // Entities with a seam: infinitely sharp edges, and vertices with one such edge or an
+    // infinitely sharp corner.
+    let sharp_edge: Vec<bool> = level
+        .edge_sharpness
+        .iter()
+        .map(|&s| crease::is_infinite(s))
+        .collect();
+    let sharp_vertex: Vec<bool> = (0..topo.num_vertices)
+        .map(|v| {
+            crease::is_infinite(level.vertex_sharpness[v])
+                || topo.vertex_edges(v).iter().any(|&e| sharp_edge[e as usize])
+        })
+        .collect();
+
+    // --- Shared points: evaluate in parallel, then lay out. -------------------------------
+    let mut jobs: Vec<(u32, u8, f64, f64)> = Vec::new();
+    let mut vertex = vec![u32::MAX; topo.num_vertices];
+    for v in 0..topo.num_vertices {
+        let faces = topo.vertex_faces(v);
+        let corners = topo.vertex_face_corners(v);
+        if let Some(i) = (0..faces.len()).find(|&i| live(faces[i] as usize)) {
+            let f = faces[i] as usize;
+            let m = corners[i] as usize;
+            let (k, u, v2) = face_edge_param(topo.face_size(f), m, 0.0);
+            vertex[v] = jobs.len() as u32;
+            jobs.push((f as u32, k, u, v2));
+        }
+    }
+    let mut edge_first = vec![u32::MAX; topo.num_edges()];
+    for e in 0..topo.num_edges() {
+        let faces = topo.edge_face_list(e as u32);
+        let Some(&f) = faces.iter().find(|&&f| live(f as usize)) else {
+            continue;
+        };
+        let f = f as usize;
+        let n = topo.face_size(f);
+        let m = (0..n)
+            .find(|&m| topo.face_edge(f, m) == e as u32)
+            .expect("edge of its face");
+        let forward = topo.face_vertices(f)[m] == topo.edge_verts[e][0];
+        let r = rates.edge[e];
+        edge_first[e] = jobs.len() as u32;
+        for i in 1..r {
+            let t = if forward {
+                i as f64 / r as f64
+            } else {
+                (r - i) as f64 / r as f64
+            };
+            let (k, u, v) = face_edge_param(n, m, t);
+            jobs.push((f as u32, k, u, v));
+        }
+    }
+    let mut centre = vec![u32::MAX; topo.num_faces()];
+    let mut spoke_first = vec![u32::MAX; topo.face_verts.len()];
+    for f in 0..topo.num_faces() {
+        let n = topo.face_size(f);
+        if n == 4 || !live(f) {
+            continue;
+        }
+        centre[f] = jobs.len() as u32;
+        jobs.push((f as u32, 0, 1.0, 1.0));
+        let base = topo.face_offsets[f] as usize;
+        for k in 0..n {
+            let s = rates.spoke[base + k];
+            spoke_first[base + k] = jobs.len() as u32;
+            for i in 1..s {
+                jobs.push((f as u32, k as u8, 1.0, i as f64 / s as f64));
+            }
+        }
+    }
+    let points: Vec<Point> = jobs
+        .par_iter()
+        .map(|&(f, k, u, v)| eval_point(table, f, k, u, v))
+        .collect::<Result<_>>()?;
+    let shared = Shared {
+        points,
+        vertex,
+        edge_first,
+        centre,
+        spoke_first,
+    };
+
+    // --- Domains: stitch patterns, evaluate interiors, in parallel. -----------------------
+    let domains: Vec<(u32, u8)> = (0..topo.num_faces())
+        .filter(|&f| live(f))
+        .flat_map(|f| {
+            let n = topo.face_size(f);
+            let ks = if n == 4 { 1 } else { n };
+            (0..ks).map(move |k| (f as u32, k as u8))
+        })
+        .collect();
+    let ctx = DomainCtx {
+        table,
+        level: &level,
+        rates: &rates,
+        shared: &shared,
+        sharp_edge: &sharp_edge,
+        sharp_vertex: &sharp_vertex,
+    };
+    let parts: Vec<DomainOut> = domains
+        .par_chunks(64)
+        .map(|chunk| {
+            let mut cache = HashMap::new();
+            chunk
+                .iter()
+                .map(|&(f, k)| ctx.domain(f as usize, k as usize, &mut cache))
+                .collect::<Result<Vec<_>>>()
+        })
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+
+    let mut out = DicedMesh::default();
+    let total_points = shared.points.len() + parts.iter().map(|p| p.points.len()).sum::<usize>();
+    let total_tris: usize = parts.iter().map(|p| p.triangles.len()).sum();
+    out.positions.reserve(total_points);
+    out.triangles.reserve(total_tris);
+    out.tri_info.reserve(total_tris);
+    for p in &shared.points {
+        out.positions.push(p.p);
+        out.normals.push(p.n);
+        out.params.push(p.param);
+    }
+    for part in parts {
+        let base = out.positions.len() as u32;
+        for p in &part.points {
+            out.positions.push(p.p);
+            out.normals.push(p.n);
+            out.params.push(p.param);
+        }
+        for (t, info) in part.triangles.iter().zip(part.tri_info) {
+            out.triangles.push(t.map(|i| {
+                if i & LOCAL != 0 {
+                    base + (i & !LOCAL)
+                } else {
+                    i
+                }
+            }));
+            out.tri_info.push(info);
+        }
+    }
+    if u32::try_from(out.positions.len()).is_err() {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "diced mesh exceeds 2^32 vertices",
+        ));
+    }
+    Ok(out)
+}
+
+/// Flag of a domain-local vertex index in [`DomainOut::triangles`].
+const LOCAL: u32 = 1 << 31;
+
+struct DomainOut {
+    points: Vec<Point>,
+    triangles: Vec<[u32; 3]>,
+    tri_info: Vec<TriInfo>,
+}
+
+struct DomainCtx<'a> {
+    table: &'a PatchTable,
+    level: &'a Level,
+    rates: &'a rates::Rates,
+    shared: &'a Shared,
+    sharp_edge: &'a [bool],
+    sharp_vertex: &'a [bool],
+}
+
+/// A point on a domain's side: its shared index, and whether it lies on a seam.
+#[derive(Clone, Copy)]
+struct SidePoint {
+    index: u32,
+    seam: bool,
+}
+
+impl DomainCtx<'_> {
+    /// The `r + 1` points of face edge `m` of face `f`, from its vertex `m` to vertex `m + 1`.
+    fn face_edge_points(&self, f: usize, m: usize) -> Vec<SidePoint> {
+        let topo = &self.level.topo;
+        let n = topo.face_size(f);
+        let e = topo.face_edge(f, m) as usize;
+        let va = topo.face_vertices(f)[m] as usize;
+        let vb = topo.face_vertices(f)[(m + 1) % n] as usize;
+        let r = self.rates.edge[e];
+        let forward = topo.edge_verts[e][0] as usize == va;
+        let first = self.shared.edge_first[e];
+        let mut pts = Vec::with_capacity(r as usize + 1);
+        pts.push(SidePoint {
+            index: self.shared.vertex[va],
+            seam: self.sharp_vertex[va],
+        });
+        for i in 1..r {
+            let j = if forward { i - 1 } else { r - 1 - i };
+            pts.push(SidePoint {
+                index: first + j,
+                seam: self.sharp_edge[e],
+            });
+        }
+        pts.push(SidePoint {
+            index: self.shared.vertex[vb],
+            seam: self.sharp_vertex[vb],
+        });
+        pts
+    }
+
+    /// Spoke `k` of n-gon `f`: from the midpoint of edge `k` to the centre.
+    fn spoke_points(&self, f: usize, k: usize) -> Vec<SidePoint> {
+        let topo = &self.level.topo;
+        let edge = self.face_edge_points(f, k);
+        let slot = topo.face_offsets[f] as usize + k;
+        let s = self.rates.spoke[slot];
+        let first = self.shared.spoke_first[slot];
+        let mut pts = vec![edge[edge.len() / 2]];
+        pts.extend((0..s - 1).map(|i| SidePoint {
+            index: first + i,
+            seam: false,
+        }));
+        pts.push(SidePoint {
+            index: self.shared.centre[f],
+            seam: false,
+        });
+        pts
+    }
+
+    fn domain(
+        &self,
+        f: usize,
+        k: usize,
+        cache: &mut HashMap<[u32; 4], Pattern>,
+    ) -> Result<DomainOut> {
+        let topo = &self.level.topo;
+        let n = topo.face_size(f);
+        let sides: [Vec<SidePoint>; 4] = if n == 4 {
+            std::array::from_fn(|m| self.face_edge_points(f, m))
+        } else {
+            let ek = self.face_edge_points(f, k);
+            let prev = (k + n - 1) % n;
+            let ep = self.face_edge_points(f, prev);
+            let mut s2 = self.spoke_points(f, prev);
+            s2.reverse();
+            [
+                ek[..=ek.len() / 2].to_vec(),
+                self.spoke_points(f, k),
+                s2,
+                ep[ep.len() / 2..].to_vec(),
+            ]
+        };
+        let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
+        let pat = cache.entry(rates).or_insert_with(|| pattern(rates));
+        let ring = pat.ring_len();
+        let mut out = DomainOut {
+            points: Vec::with_capacity(pat.interior.len()),
+            triangles: Vec::with_capacity(pat.triangles.len()),
+            tri_info: Vec::with_capacity(pat.triangles.len()),
+        };
+        // Map pattern indices to vertex indices.
+        let mut map: Vec<u32> = Vec::with_capacity(ring + pat.interior.len());
+        for (s, side) in sides.iter().enumerate() {
+            for (j, sp) in side[..side.len() - 1].iter().enumerate() {
+                let owner = self.shared.points[sp.index as usize].param;
+                if sp.seam && (owner.0 as usize != f || owner.1 as usize != k) {
+                    // A seam vertex owned by another domain: copy its position, own normal.
+                    let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
+                    let mut q = eval_point(self.table, f as u32, k as u8, u, v)?;
+                    q.p = self.shared.points[sp.index as usize].p;
+                    map.push(LOCAL | out.points.len() as u32);
+                    out.points.push(q);
+                } else {
+                    map.push(sp.index);
+                }
+            }
+        }
+        for &[u, v] in &pat.interior {
+            map.push(LOCAL | out.points.len() as u32);
+            out.points
+                .push(eval_point(self.table, f as u32, k as u8, u, v)?);
+        }
+        for t in &pat.triangles {
+            let uv = t.map(|i| pat.uv(i as usize));
+            let (cu, cv) = (
+                (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
+                (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
+            );
+            let level = self.table.eval(f, k, cu, cv)?.level;
+            out.triangles.push(t.map(|i| map[i as usize]));
+            out.tri_info.push(TriInfo {
+                face: f as u32,
+                k: k as u8,
+                level,
+                uv: uv.map(|p| [p[0] as f32, p[1] as f32]),
+            });
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,158 @@
+//! Dicing: crack-free by construction (every diced edge of a closed surface has its twin, by
+//! vertex position bits), vertices exactly on the limit surface, rates as specified.
+
+mod common;
+
+use limitray::dice::{dice, DiceOptions, DiceRate, DicedMesh};
+use limitray::mesh::obj::read_obj;
+use limitray::mesh::ControlMesh;
+use limitray::patch::{PatchOptions, PatchTable};
+use std::collections::HashMap;
+
+fn diced(mesh: &ControlMesh, rate: DiceRate) -> (PatchTable, DicedMesh) {
+    let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
+    let d = dice(
+        &table,
+        mesh,
+        &DiceOptions {
+            rate,
+            max_rate: 256,
+        },
+    )
+    .unwrap();
+    (table, d)
+}
+
+/// Directed edges keyed by the bits of their end positions: the count of each edge minus
+/// the count of its reverse. Zero everywhere means every edge has a twin with bitwise equal
+/// end points — no crack, no T-junction.
+fn open_edges(d: &DicedMesh) -> usize {
+    let key = |i: u32| d.positions[i as usize].map(f32::to_bits);
+    let mut count: HashMap<([u32; 3], [u32; 3]), i64> = HashMap::new();
+    for t in &d.triangles {
+        for k in 0..3 {
+            let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+            *count.entry((a, b)).or_default() += 1;
+            *count.entry((b, a)).or_default() -= 1;
+        }
+    }
+    count.values().filter(|&&c| c != 0).count()
+}
+
+/// True if the control mesh is closed and manifold (every edge has two faces).
+fn closed(mesh: &ControlMesh) -> bool {
+    let topo =
+        limitray::mesh::Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
+            .unwrap();
+    mesh.holes.is_empty()
+        && (0..topo.num_edges())
+            .all(|e| topo.edge_face_count(e as u32) == 2 && !topo.edge_nonmanifold[e])
+        && topo.vert_tags.iter().all(|t| !t.nonmanifold)
+}
+
+#[test]
+fn cube_is_closed_at_every_rate() {
+    let mesh = common::cube_builder().build().unwrap();
+    for r in [1, 2, 3, 4, 7, 16] {
+        let (_, d) = diced(&mesh, DiceRate::Uniform(r));
+        assert_eq!(d.triangles.len(), 6 * 2 * (r * r) as usize, "rate {r}");
+        assert_eq!(open_edges(&d), 0, "rate {r}");
+    }
+}
+
+/// Every closed shape of the corpus dices into a closed triangle mesh at uniform rates and at
+/// an edge-length rate (mixed rates per edge, stitched).
+#[test]
+fn corpus_closed_shapes_dice_closed() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mut checked = 0;
+    for path in common::catmark_files(&models) {
+        let Ok(mesh) = read_obj(&path) else { continue };
+        if !closed(&mesh) {
+            continue;
+        }
+        let diag = mesh.diagonal();
+        let rates = if mesh.num_faces() > 1000 {
+            vec![DiceRate::Uniform(1), DiceRate::Uniform(2)]
+        } else {
+            vec![
+                DiceRate::Uniform(1),
+                DiceRate::Uniform(3),
+                DiceRate::EdgeLength(diag / 40.0),
+            ]
+        };
+        for rate in rates {
+            let (_, d) = diced(&mesh, rate);
+            assert_eq!(open_edges(&d), 0, "{}: {rate:?}", path.display());
+        }
+        checked += 1;
+    }
+    eprintln!("closed shapes checked: {checked}");
+    assert!(checked >= 25, "only {checked} closed shapes");
+}
+
+/// Every diced vertex is the exact limit point at its recorded parameters, rounded once to
+/// f32: |p − eval| ≤ half an ulp of the coordinate (plus nothing: eval is deterministic).
+#[test]
+fn vertices_lie_on_the_limit_surface() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    for name in [
+        "catmark_car",
+        "catmark_pyramid_creases2",
+        "catmark_fvar_bound1",
+        "catmark_tent",
+    ] {
+        let path = models.join(format!("opensubdiv/{name}.obj"));
+        let mesh = read_obj(&path).unwrap();
+        let (table, d) = diced(&mesh, DiceRate::Uniform(3));
+        for (i, &(f, k, u, v)) in d.params.iter().enumerate() {
+            let s = table
+                .eval(f as usize, k as usize, u as f64, v as f64)
+                .unwrap();
+            for a in 0..3 {
+                let x = d.positions[i][a];
+                // The parameters are stored as f32: allow the surface's change over one f32
+                // step of (u, v) on top of the rounding of the position.
+                let slack = (s.du[a].abs() + s.dv[a].abs()) * 2.0 * f32::EPSILON as f64
+                    + (x.abs() * f32::EPSILON) as f64;
+                assert!(
+                    (x as f64 - s.p[a]).abs() <= slack,
+                    "{name}: vertex {i} axis {a}: {x} vs {}",
+                    s.p[a]
+                );
+            }
+        }
+    }
+}
+
+/// Sides of n-gons: an edge between a quad and a pentagon gets an even rate on both sides;
+/// the mesh stays closed.
+#[test]
+fn ngon_rates_are_even_and_stitched() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mesh = read_obj(&models.join("opensubdiv/catmark_pyramid.obj")).unwrap();
+    for r in [1, 2, 5] {
+        let (_, d) = diced(&mesh, DiceRate::Uniform(r));
+        assert_eq!(open_edges(&d), 0, "rate {r}");
+    }
+}
+
+#[test]
+fn bad_rates_are_errors() {
+    let mesh = common::cube_builder().build().unwrap();
+    let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+    for rate in [
+        DiceRate::Uniform(0),
+        DiceRate::EdgeLength(0.0),
+        DiceRate::EdgeLength(f64::NAN),
+    ] {
+        let opts = DiceOptions { rate, max_rate: 64 };
+        assert!(dice(&table, &mesh, &opts).is_err(), "{rate:?}");
+    }
+}
