@@ -11,11 +11,14 @@
 pub mod bench;
 pub mod bvh;
 pub mod cli_eval;
+pub mod cli_render;
 pub mod dice;
 pub mod error;
 pub mod info;
+pub mod io;
 pub mod mesh;
 pub mod patch;
 pub mod refine;
+pub mod render;
 
 pub use error::{Error, ErrorKind, Result};

@@ -126,6 +126,8 @@ enum Command {
     },
     /// Benchmark table building and application (JSON line on stdout).
     BenchRefine(limitray::bench::RefineBenchArgs),
+    /// Path trace a scene file to EXR (beauty + AOVs), optionally with a PNG preview.
+    Render(limitray::cli_render::RenderArgs),
 }
 
 fn load(path: &Path) -> Result<ControlMesh, Error> {
@@ -260,6 +262,7 @@ fn run(cli: Cli) -> Result<(), Error> {
             println!("{v}");
             Ok(())
         }
+        Command::Render(args) => limitray::cli_render::run(&args).map(|_| ()),
         Command::BenchRefine(args) => {
             let line = limitray::bench::refine_bench(&args)?;
             println!("{line}");

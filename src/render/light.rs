@@ -1,6 +1,6 @@
 //! Lights for next-event estimation: quad (parallelogram) area lights, emissive meshes and the
-//! environment, with a light-selection distribution proportional to emitted power (the
-//! environment, when there are other lights, is chosen with probability ½).
+//! environment, with a light-selection distribution proportional to each light's estimated
+//! irradiance at a point of interest (see [`Lights::new`]).
 //!
 //! Quad lights emit on one side, the side of `edge1 × edge2`; emissive meshes emit on both
 //! sides of every triangle. All densities returned here are w.r.t. solid angle at the shaded
@@ -156,40 +156,47 @@ fn luminance(c: Vec3) -> f32 {
 }
 
 impl Lights {
-    /// Collects the lights; `num_instances` sizes the instance → light table.
+    /// Collects the lights; `num_instances` sizes the instance → light table and `reference`
+    /// is a point of interest (the camera's look-at point) for the selection weights.
+    ///
+    /// Selection weights estimate each light's irradiance at `reference`: `π · luminance` of
+    /// the environment's mean; `luminance · area · cos / d²` for a quad light (cos of its normal
+    /// towards `reference`, at least 0.1; `d²` at least the area); `luminance · area / d²` for
+    /// an emissive mesh (`d` from its area-weighted centroid, `d²` at least the area).
     pub fn new(
         quads: Vec<QuadLight>,
         meshes: Vec<MeshLight>,
         env: Option<Environment>,
         num_instances: usize,
+        reference: Vec3,
     ) -> Lights {
         let mut w: Vec<f32> = quads
             .iter()
-            .map(|q| luminance(q.radiance).max(0.0) * q.area)
-            .chain(
-                meshes
-                    .iter()
-                    .map(|m| 2.0 * luminance(m.radiance).max(0.0) * m.area),
-            )
+            .map(|q| {
+                let c = q.corner + (q.edge1 + q.edge2) * 0.5;
+                let d = reference - c;
+                let d2 = d.length_squared().max(q.area);
+                let cos = (d.normalize_or_zero().dot(q.normal)).max(0.1);
+                luminance(q.radiance).max(0.0) * q.area * cos / d2
+            })
+            .chain(meshes.iter().map(|m| {
+                let mut centroid = Vec3::ZERO;
+                for (t, &p) in m.triangles.iter().zip(&m.dist.pmf) {
+                    centroid += (t[0] + t[1] + t[2]) * (p / 3.0);
+                }
+                let d2 = (reference - centroid).length_squared().max(m.area);
+                luminance(m.radiance).max(0.0) * m.area / d2
+            }))
             .collect();
-        let others: f64 = w.iter().map(|&x| x as f64).sum();
-        if others > 0.0 {
-            for x in &mut w {
-                *x = (*x as f64 / others) as f32;
-            }
+        if let Some(e) = &env {
+            w.push(std::f32::consts::PI * luminance(e.mean()).max(0.0));
         }
-        if env.is_some() {
-            let has_others = others > 0.0;
-            if has_others {
-                for x in &mut w {
-                    *x *= 0.5;
-                }
-                w.push(0.5);
-            } else {
-                for x in &mut w {
-                    *x = 0.0;
-                }
-                w.push(1.0);
+        // Every light keeps a floor of 1% of the mean weight, so no light is starved.
+        let total: f32 = w.iter().sum();
+        if total > 0.0 {
+            let floor = 0.01 * total / w.len() as f32;
+            for x in &mut w {
+                *x = x.max(floor);
             }
         }
         let mut instance_light = vec![None; num_instances];
@@ -359,7 +366,7 @@ mod tests {
         )
         .unwrap();
         assert!((q.normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
-        let lights = Lights::new(vec![q], vec![], None, 0);
+        let lights = Lights::new(vec![q], vec![], None, 0, Vec3::ZERO);
         let n = 50_000u32;
         let mut est = 0.0f64;
         for i in 0..n {
@@ -392,10 +399,15 @@ mod tests {
             vec![m],
             Some(Environment::Constant(Vec3::ONE)),
             5,
+            Vec3::new(0.5, -2.0, 0.5),
         );
-        assert_eq!(l.select_pmf(LightId::Env), 0.5);
-        // Powers 1·1 and 2·2·0.5 = 2: one third and two thirds of the other half.
-        assert!((l.select_pmf(LightId::Quad(0)) - 0.5 / 3.0).abs() < 1e-6);
+        // Quad: 1 · 1 · cos 1 / 4; mesh: 2 · 0.5 / |(0.5,-2,0.5) - (1/3,1/3,0)|²; env: π.
+        let wq = 0.25f32;
+        let wm = 1.0 / (Vec3::new(0.5, -2.0, 0.5) - Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0)).length_squared();
+        let we = std::f32::consts::PI;
+        let sum = wq + wm + we;
+        assert!((l.select_pmf(LightId::Env) - we / sum).abs() < 1e-6);
+        assert!((l.select_pmf(LightId::Quad(0)) - wq / sum).abs() < 1e-6);
         assert_eq!(l.instance_light[3], Some(0));
         assert!(QuadLight::new(Vec3::ZERO, Vec3::X, Vec3::X, Vec3::ONE).is_none());
         assert!(MeshLight::new(0, vec![], Vec3::ONE).is_none());
