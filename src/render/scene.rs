@@ -863,7 +863,7 @@ radiance = 0.2
         );
         let bad = GOOD.replace("material = \"gold\"", "material = \"gould\"");
         let e = err(&bad);
-        assert!(e.starts_with("s.toml:32: key 'mesh[1].material': no material named 'gould'"), "{e}");
+        assert!(e.starts_with("s.toml:31: key 'mesh[1].material': no material named 'gould'"), "{e}");
         let bad = GOOD.replace("fov = 40", "fovv = 40");
         let e = err(&bad);
         assert!(e.starts_with("s.toml:10: key 'camera.fovv': unknown field"), "{e}");
@@ -875,7 +875,7 @@ radiance = 0.2
         let bad = GOOD.replace("preset = \"gold\"", "preset = \"gold\"\nior = 1.5");
         assert!(err(&bad).contains("'ior' does not apply to a conductor"));
         let bad = GOOD.replace("edge2 = [0, 0, 2]", "edge2 = [4, 0, 0]");
-        assert!(err(&bad).starts_with("s.toml:39: key 'light[0].edge2':"));
+        assert!(err(&bad).starts_with("s.toml:37: key 'light[0].edge2':"));
         let bad = GOOD.replace("rate = 4", "rate = 4\npixels_per_edge = 1");
         assert!(err(&bad).contains("either rate or pixels_per_edge"));
         let e = err("[camera\n");
