@@ -187,6 +187,15 @@ impl World {
         let mut instance_material = Vec::new();
         let mut mesh_lights = Vec::new();
         for (m, bvh) in desc.meshes.iter().zip(&bvhs) {
+            if bvh.diced.triangles.is_empty() {
+                eprintln!(
+                    "warning: {}:{}: mesh {} has no surface (every face a hole?); skipped",
+                    scene_name,
+                    m.line,
+                    m.file.display()
+                );
+                continue;
+            }
             stats.triangles += bvh.diced.triangles.len();
             stats.bytes += bvh.bytes();
             let id = scene.add_mesh(bvh.clone());
