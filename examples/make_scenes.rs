@@ -75,9 +75,24 @@ fn main() {
             &format!("Rounded box: cube with all 12 edges at sharpness {s}."),
         );
     }
-    write(&meshes, "blob.obj", &shapes::blob(), "Lobed geodesic blob (organic; valence 3/5/6).");
-    write(&meshes, "gear12.obj", &shapes::gear(12), "Spur gear, 12 teeth, semi-sharp creases.");
-    write(&meshes, "gear8.obj", &shapes::gear(8), "Spur gear, 8 teeth, semi-sharp creases.");
+    write(
+        &meshes,
+        "blob.obj",
+        &shapes::blob(),
+        "Lobed geodesic blob (organic; valence 3/5/6).",
+    );
+    write(
+        &meshes,
+        "gear12.obj",
+        &shapes::gear(12),
+        "Spur gear, 12 teeth, semi-sharp creases.",
+    );
+    write(
+        &meshes,
+        "gear8.obj",
+        &shapes::gear(8),
+        "Spur gear, 8 teeth, semi-sharp creases.",
+    );
     write(
         &meshes,
         "cyclorama.obj",
@@ -89,7 +104,10 @@ fn main() {
     let planes = (0..3)
         .map(|c| {
             let name = ["R", "G", "B"][c];
-            (name, (0..w * h).map(|i| rgb[3 * i + c]).collect::<Vec<f32>>())
+            (
+                name,
+                (0..w * h).map(|i| rgb[3 * i + c]).collect::<Vec<f32>>(),
+            )
         })
         .collect();
     let path = dir.join("studio.exr");

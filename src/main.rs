@@ -126,6 +126,50 @@ enum Command {
     },
     /// Benchmark table building and application (JSON line on stdout).
     BenchRefine(limitray::bench::RefineBenchArgs),
+    /// Dice the limit surface into crack-free triangles and write them as OBJ.
+    Dice {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        #[command(flatten)]
+        rules: RuleArgs,
+        #[command(flatten)]
+        dice: limitray::cli_trace::DiceArgs,
+        /// Output OBJ file ('-' for standard output).
+        #[arg(short = 'o', long = "output")]
+        output: PathBuf,
+    },
+    /// Trace rays: stdin lines `ox oy oz dx dy dz`, stdout `hit t face k u v nx ny nz` or `miss`.
+    Trace {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        #[command(flatten)]
+        rules: RuleArgs,
+        #[command(flatten)]
+        dice: limitray::cli_trace::DiceArgs,
+        /// Refine each hit onto the exact limit surface (Newton, f64).
+        #[arg(long)]
+        exact: bool,
+    },
+    /// Benchmark dicing, BVH build and ray queries (JSON line on stdout).
+    BenchTrace(limitray::cli_trace::TraceBenchArgs),
+    /// Accuracy of diced hits against the exact limit surface, per rate (JSON lines).
+    Accuracy {
+        /// OBJ file with OpenSubdiv tags.
+        mesh: PathBuf,
+        #[command(flatten)]
+        rules: RuleArgs,
+        #[command(flatten)]
+        dice: limitray::cli_trace::DiceArgs,
+        /// Rates to measure.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64")]
+        rates: Vec<u32>,
+        /// Random rays per rate.
+        #[arg(long, default_value_t = 20_000)]
+        rays: usize,
+        /// Random seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Path trace a scene file to EXR (beauty + AOVs), optionally with a PNG preview.
     Render(limitray::cli_render::RenderArgs),
 }
@@ -266,6 +310,70 @@ fn run(cli: Cli) -> Result<(), Error> {
         Command::BenchRefine(args) => {
             let line = limitray::bench::refine_bench(&args)?;
             println!("{line}");
+            Ok(())
+        }
+        Command::Dice {
+            mesh,
+            rules,
+            dice,
+            output,
+        } => {
+            let m = load(&mesh)?;
+            let (_, d) = limitray::cli_trace::dice_mesh(&m, rules.options(&m), &dice)?;
+            let io_err = |e: std::io::Error| {
+                Error::new(ErrorKind::Io, e.to_string()).in_file(output.display().to_string())
+            };
+            if output.as_os_str() == "-" {
+                let stdout = std::io::stdout();
+                let mut w = std::io::BufWriter::new(stdout.lock());
+                limitray::cli_trace::write_diced(&mut w, &d).map_err(io_err)?;
+            } else {
+                let f = std::fs::File::create(&output).map_err(io_err)?;
+                let mut w = std::io::BufWriter::new(f);
+                limitray::cli_trace::write_diced(&mut w, &d).map_err(io_err)?;
+            }
+            Ok(())
+        }
+        Command::Trace {
+            mesh,
+            rules,
+            dice,
+            exact,
+        } => {
+            let m = load(&mesh)?;
+            let (table, d) = limitray::cli_trace::dice_mesh(&m, rules.options(&m), &dice)?;
+            let bvh = limitray::bvh::MeshBvh::build(d);
+            limitray::cli_trace::trace(
+                &bvh,
+                &table,
+                exact,
+                std::io::stdin().lock(),
+                std::io::stdout().lock(),
+            )
+        }
+        Command::BenchTrace(args) => {
+            println!("{}", limitray::cli_trace::trace_bench(&args)?);
+            Ok(())
+        }
+        Command::Accuracy {
+            mesh,
+            rules,
+            dice,
+            rates,
+            rays,
+            seed,
+        } => {
+            let m = load(&mesh)?;
+            for line in limitray::cli_trace::accuracy_table(
+                &m,
+                rules.options(&m),
+                &dice,
+                &rates,
+                rays,
+                seed,
+            )? {
+                println!("{line}");
+            }
             Ok(())
         }
     }

@@ -16,10 +16,8 @@ impl TempDir {
     fn new(tag: &str) -> Self {
         static COUNTER: AtomicUsize = AtomicUsize::new(0);
         let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-        let dir = std::env::temp_dir().join(format!(
-            "limitray-render-{tag}-{}-{n}",
-            std::process::id()
-        ));
+        let dir =
+            std::env::temp_dir().join(format!("limitray-render-{tag}-{}-{n}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         TempDir(dir)
     }
@@ -105,7 +103,11 @@ fn means(f: &Film) -> (f64, f64, usize) {
             n_bg += 1;
         }
     }
-    (s_obj / n_obj.max(1) as f64, s_bg / n_bg.max(1) as f64, n_obj)
+    (
+        s_obj / n_obj.max(1) as f64,
+        s_bg / n_bg.max(1) as f64,
+        n_obj,
+    )
 }
 
 /// White furnace. In a uniform environment of radiance 1 a closed object of albedo ρ seen from
@@ -127,7 +129,10 @@ fn white_furnace_constant_environment() {
         let (obj, bg, n) = means(&f);
         eprintln!("furnace albedo {albedo}: object mean {obj:.5} over {n} pixels, background {bg}");
         assert!(n > 500, "object covers {n} pixels");
-        assert!((obj - want).abs() < 0.01 * want, "albedo {albedo}: mean {obj}, want {want}");
+        assert!(
+            (obj - want).abs() < 0.01 * want,
+            "albedo {albedo}: mean {obj}, want {want}"
+        );
         assert_eq!(bg, 1.0);
     }
 }
@@ -150,7 +155,12 @@ fn white_furnace_map_environment() {
     )
     .unwrap();
     let world = world(
-        &furnace(1.0, 16, "map = \"ones.exr\"\nrotate = 30", "rounded_box_s0.obj"),
+        &furnace(
+            1.0,
+            16,
+            "map = \"ones.exr\"\nrotate = 30",
+            "rounded_box_s0.obj",
+        ),
         &dir.0,
     );
     let f = render_one_thread(&world);
@@ -176,7 +186,10 @@ fn energy_never_grows_with_depth() {
         let f = render_one_thread(&w);
         let m = f.mean_rgb()[0];
         means_by_depth.push(m);
-        assert!(m <= 1.0 + 0.01, "depth {depth}: mean {m} above the furnace value");
+        assert!(
+            m <= 1.0 + 0.01,
+            "depth {depth}: mean {m} above the furnace value"
+        );
         if let Some(p) = &prev {
             for (a, b) in p.pixels.iter().zip(&f.pixels) {
                 assert!(b.rgba[0] >= a.rgba[0], "depth {depth}: a pixel lost energy");
@@ -298,10 +311,16 @@ fn identical_on_one_and_two_threads() {
         let p = dir.path(&format!("t{threads}.exr"));
         write_film(&p, &film).unwrap();
         files.push(std::fs::read(&p).unwrap());
-        assert!(film.pixels.iter().all(|p| p.rgba.iter().all(|c| c.is_finite())));
+        assert!(film
+            .pixels
+            .iter()
+            .all(|p| p.rgba.iter().all(|c| c.is_finite())));
         assert!(film.mean_rgb()[0] > 0.0);
     }
-    assert!(files[0] == files[1], "EXR bytes differ between 1 and 2 threads");
+    assert!(
+        files[0] == files[1],
+        "EXR bytes differ between 1 and 2 threads"
+    );
 }
 
 /// The EXR is read back by an independent reader (the exr crate's generic reader) with the
@@ -330,7 +349,10 @@ fn exr_reads_back_with_documented_channels() {
     let nz = back.get("N.Z").unwrap();
     let alb = back.get("albedo.G").unwrap();
     // Corner pixel: background.
-    assert_eq!((face[0], z[0], level[0], a[0]), (-1.0, f32::INFINITY, -1.0, 0.0));
+    assert_eq!(
+        (face[0], z[0], level[0], a[0]),
+        (-1.0, f32::INFINITY, -1.0, 0.0)
+    );
     // Centre pixel: the box, ~3.3 away, one of its 6 faces, facing the camera (+z-ish).
     let c = 24 * 48 + 24;
     assert!((0.0..6.0).contains(&face[c]) && face[c].fract() == 0.0);
@@ -370,8 +392,16 @@ fn cli_renders_a_tiny_scene() {
         .args(["--spp", "2", "--res", "24x16", "--threads", "2", "--quiet"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.stderr.is_empty(), "--quiet printed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "--quiet printed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let back = read_channels(&exr).unwrap();
     assert_eq!((back.width, back.height), (24, 16));
     let img = image::open(&png).unwrap();

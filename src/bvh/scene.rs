@@ -212,7 +212,8 @@ impl SceneBvh {
             let inst = &self.instances[i as usize];
             let oray = self.object_ray(inst, ray, tmax);
             if let Some(mut h) = self.meshes[inst.mesh as usize].intersect(&oray) {
-                if h.t < best.map_or(f32::INFINITY, |b| b.hit.t) {
+                // Equal t: the lowest instance wins (independent of traversal order).
+                if best.is_none_or(|b| h.t < b.hit.t || (h.t == b.hit.t && i < b.instance)) {
                     h.ng = self.to_world_normal(inst, h.ng);
                     h.ns = self.to_world_normal(inst, h.ns);
                     best = Some(SceneHit {

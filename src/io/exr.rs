@@ -159,8 +159,13 @@ mod tests {
         let p = dir.join("t.exr");
         let r: Vec<f32> = (0..6).map(|i| i as f32 * 0.5).collect();
         let g = vec![f32::INFINITY; 6];
-        write_planes(&p, 3, 2, vec![("R", r.clone()), ("G", g.clone()), ("B", r.clone())])
-            .unwrap();
+        write_planes(
+            &p,
+            3,
+            2,
+            vec![("R", r.clone()), ("G", g.clone()), ("B", r.clone())],
+        )
+        .unwrap();
         let back = read_channels(&p).unwrap();
         assert_eq!((back.width, back.height), (3, 2));
         assert_eq!(back.get("R").unwrap(), r.as_slice());

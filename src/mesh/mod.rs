@@ -3,8 +3,8 @@
 
 mod builder;
 pub mod generate;
-pub mod shapes;
 pub mod obj;
+pub mod shapes;
 pub mod topology;
 
 pub use builder::MeshBuilder;

@@ -334,11 +334,13 @@ mod tests {
     #[test]
     fn closed_shapes_are_closed() {
         for m in [rounded_box(2.0), blob(), gear(8)] {
-            let topo =
-                crate::mesh::Topology::new(m.num_vertices(), &m.face_offsets, &m.face_verts)
-                    .unwrap();
+            let topo = crate::mesh::Topology::new(m.num_vertices(), &m.face_offsets, &m.face_verts)
+                .unwrap();
             assert!((0..topo.num_edges() as u32).all(|e| topo.edge_face_count(e) == 2));
-            assert!(topo.edge_nonmanifold.iter().all(|&b| !b), "inconsistent winding");
+            assert!(
+                topo.edge_nonmanifold.iter().all(|&b| !b),
+                "inconsistent winding"
+            );
         }
     }
 }

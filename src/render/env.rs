@@ -223,7 +223,11 @@ mod tests {
         }
         assert!(zero < 10, "{zero} samples at a pole");
         let want = 4.0 * std::f64::consts::PI * env.mean().x as f64;
-        assert!(((est / n as f64) - want).abs() < 0.01 * want, "{} {want}", est / n as f64);
+        assert!(
+            ((est / n as f64) - want).abs() < 0.01 * want,
+            "{} {want}",
+            est / n as f64
+        );
     }
 
     #[test]

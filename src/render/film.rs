@@ -142,14 +142,27 @@ mod tests {
         assert_eq!(t.len(), 3 * 2);
         let total: usize = t.iter().map(|t| t.len()).sum();
         assert_eq!(total, 37 * 20);
-        assert_eq!(t[2], Tile { x0: 32, y0: 0, x1: 37, y1: 16 });
+        assert_eq!(
+            t[2],
+            Tile {
+                x0: 32,
+                y0: 0,
+                x1: 37,
+                y1: 16
+            }
+        );
         assert!(tiles(0, 5, 16).is_empty());
     }
 
     #[test]
     fn put_tile_places_pixels() {
         let mut f = Film::new(5, 3);
-        let tile = Tile { x0: 3, y0: 1, x1: 5, y1: 3 };
+        let tile = Tile {
+            x0: 3,
+            y0: 1,
+            x1: 5,
+            y1: 3,
+        };
         let mut v = vec![PixelValue::default(); 4];
         v[3].rgba = [1.0, 2.0, 3.0, 1.0];
         f.put_tile(&tile, &v);

@@ -195,7 +195,8 @@ impl World {
                         let cos_l = d.dot(Vec3::from(h.hit.ng));
                         power_heuristic(
                             prev_pdf,
-                            self.lights.pdf_area_light(LightId::Mesh(li), h.hit.t, cos_l),
+                            self.lights
+                                .pdf_area_light(LightId::Mesh(li), h.hit.t, cos_l),
                         )
                     }
                     _ => 1.0,
@@ -252,8 +253,13 @@ impl World {
 
             // Continue the path by BSDF sampling.
             let dim = |j| rng.get(dims::bounce(bounce, j));
-            let Some(bs) = mat.sample(wo_l, s.etap, dim(dims::BSDF_LOBE), dim(dims::BSDF_U), dim(dims::BSDF_V))
-            else {
+            let Some(bs) = mat.sample(
+                wo_l,
+                s.etap,
+                dim(dims::BSDF_LOBE),
+                dim(dims::BSDF_U),
+                dim(dims::BSDF_V),
+            ) else {
                 break;
             };
             let wi = s.frame.to_world(bs.wi);

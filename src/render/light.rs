@@ -371,8 +371,12 @@ mod tests {
         let mut est = 0.0f64;
         for i in 0..n {
             let r = PathRng::new(5, i, 0);
-            let s = lights.sample(Vec3::ZERO, r.get(0), r.get(1), r.get(2)).unwrap();
-            let (t, _) = lights.intersect_quads(Vec3::ZERO, s.wi, f32::INFINITY).unwrap();
+            let s = lights
+                .sample(Vec3::ZERO, r.get(0), r.get(1), r.get(2))
+                .unwrap();
+            let (t, _) = lights
+                .intersect_quads(Vec3::ZERO, s.wi, f32::INFINITY)
+                .unwrap();
             assert!((t - s.dist).abs() < 1e-4);
             let p2 = lights.pdf_area_light(LightId::Quad(0), s.dist, s.wi.dot(q.normal));
             assert!((p2 - s.pdf).abs() < 1e-4 * s.pdf);
@@ -382,18 +386,15 @@ mod tests {
         let want = 4.0 * (1.0f64 / (5.0f64 * 5.0).sqrt()).asin();
         assert!(((est / n as f64) - want).abs() < 0.01 * want);
         // Back side: nothing.
-        assert!(lights.sample(Vec3::new(0.0, 2.0, 0.0), 0.5, 0.5, 0.5).is_none());
+        assert!(lights
+            .sample(Vec3::new(0.0, 2.0, 0.0), 0.5, 0.5, 0.5)
+            .is_none());
     }
 
     #[test]
     fn selection_with_environment() {
         let q = QuadLight::new(Vec3::ZERO, Vec3::X, Vec3::Z, Vec3::ONE).unwrap();
-        let m = MeshLight::new(
-            3,
-            vec![[Vec3::ZERO, Vec3::X, Vec3::Y]],
-            Vec3::splat(2.0),
-        )
-        .unwrap();
+        let m = MeshLight::new(3, vec![[Vec3::ZERO, Vec3::X, Vec3::Y]], Vec3::splat(2.0)).unwrap();
         let l = Lights::new(
             vec![q],
             vec![m],
@@ -403,7 +404,8 @@ mod tests {
         );
         // Quad: 1 · 1 · cos 1 / 4; mesh: 2 · 0.5 / |(0.5,-2,0.5) - (1/3,1/3,0)|²; env: π.
         let wq = 0.25f32;
-        let wm = 1.0 / (Vec3::new(0.5, -2.0, 0.5) - Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0)).length_squared();
+        let wm = 1.0
+            / (Vec3::new(0.5, -2.0, 0.5) - Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0)).length_squared();
         let we = std::f32::consts::PI;
         let sum = wq + wm + we;
         assert!((l.select_pmf(LightId::Env) - we / sum).abs() < 1e-6);

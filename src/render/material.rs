@@ -396,7 +396,10 @@ fn rough_dielectric_eval(wo: Vec3, wi: Vec3, etap: f32, alpha: f32) -> (f32, f32
     if denom <= 0.0 {
         return (0.0, 0.0);
     }
-    let val = ggx_d(m, alpha) * ggx_g2(wo, wi, alpha) * (1.0 - f) * (wim * wom / (wi.z * wo.z * denom)).abs()
+    let val = ggx_d(m, alpha)
+        * ggx_g2(wo, wi, alpha)
+        * (1.0 - f)
+        * (wim * wom / (wi.z * wo.z * denom)).abs()
         / (etap * etap);
     let pdf = vndf_pdf(wo, m, alpha) * (1.0 - f) * wim.abs() / denom;
     (val, pdf)
@@ -541,7 +544,17 @@ mod tests {
         for c in [0.2f32, 0.6, 1.0] {
             assert!((fresnel_conductor(c, 1.5, 0.0) - fresnel_dielectric(c, 1.5)).abs() < 1e-5);
         }
-        assert!((fresnel_eval(Fresnel::Schlick { f0: Vec3::splat(0.5) }, 1.0).x - 0.5).abs() < 1e-7);
+        assert!(
+            (fresnel_eval(
+                Fresnel::Schlick {
+                    f0: Vec3::splat(0.5)
+                },
+                1.0
+            )
+            .x - 0.5)
+                .abs()
+                < 1e-7
+        );
     }
 
     #[test]

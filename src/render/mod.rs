@@ -5,12 +5,12 @@
 pub mod camera;
 pub mod env;
 pub mod film;
+pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
-pub mod integrator;
 pub mod world;
 
 pub use film::Film;

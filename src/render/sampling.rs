@@ -112,7 +112,13 @@ impl Distribution1D {
         let n = weights.len();
         let clean: Vec<f64> = weights
             .iter()
-            .map(|&w| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 })
+            .map(|&w| {
+                if w.is_finite() && w > 0.0 {
+                    w as f64
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let mut total: f64 = clean.iter().sum();
         let uniform = total <= 0.0;

@@ -531,9 +531,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
                     },
                     line: src.line_of(m.span().start),
                 }),
-                (None, None) => {
-                    return Err(src.err(e.span(), "environment needs radiance or map"))
-                }
+                (None, None) => return Err(src.err(e.span(), "environment needs radiance or map")),
             }
         }
     };
@@ -673,7 +671,10 @@ fn material(src: &Src, m: &Spanned<RawMaterial>) -> Result<Material> {
             let fresnel = match (&r.eta, &r.k, &r.base_color, &r.preset) {
                 (Some(e), Some(k), None, None) => {
                     let (e, k) = (e.get_ref().vec(), k.get_ref().vec());
-                    if !(finite3(e) && finite3(k) && e.min_element() > 0.0 && k.min_element() >= 0.0)
+                    if !(finite3(e)
+                        && finite3(k)
+                        && e.min_element() > 0.0
+                        && k.min_element() >= 0.0)
                     {
                         return Err(src.err(
                             r.eta.as_ref().map_or(0..0, |v| v.span()),
@@ -732,7 +733,10 @@ fn transform(src: &Src, r: &RawMesh) -> Result<Affine3A> {
         .into_iter()
         .flatten()
         {
-            return Err(src.err(other, "give either matrix or translate/rotate/scale, not both"));
+            return Err(src.err(
+                other,
+                "give either matrix or translate/rotate/scale, not both",
+            ));
         }
         let v = m.get_ref();
         if v.len() != 16 || !v.iter().all(|x| x.is_finite()) {
@@ -742,8 +746,8 @@ fn transform(src: &Src, r: &RawMesh) -> Result<Affine3A> {
             return Err(src.err(m.span(), "matrix must be affine: last row 0 0 0 1"));
         }
         let mat = Mat4::from_cols_array(&[
-            v[0], v[4], v[8], v[12], v[1], v[5], v[9], v[13], v[2], v[6], v[10], v[14], v[3],
-            v[7], v[11], v[15],
+            v[0], v[4], v[8], v[12], v[1], v[5], v[9], v[13], v[2], v[6], v[10], v[14], v[3], v[7],
+            v[11], v[15],
         ]);
         let a = Affine3A::from_mat4(mat);
         if !(a.matrix3.determinant().abs() > 1e-12) {
@@ -843,7 +847,9 @@ radiance = 0.2
         assert_eq!(s.meshes[1].dicing, Dicing::PixelsPerEdge(2.0));
         // Materials are sorted: clay = 0.
         assert_eq!(s.meshes[0].material, 0);
-        let p = s.meshes[0].transform.transform_point3(Vec3::new(1.0, 0.0, 0.0));
+        let p = s.meshes[0]
+            .transform
+            .transform_point3(Vec3::new(1.0, 0.0, 0.0));
         // Scale 2, rotate +90° about y: x → -z; then translate.
         assert!((p - Vec3::new(1.0, 0.0, -2.0)).length() < 1e-5, "{p}");
         assert_eq!(s.quads.len(), 1);
@@ -851,7 +857,9 @@ radiance = 0.2
     }
 
     fn err(text: &str) -> String {
-        parse_scene(text, Path::new("s.toml")).unwrap_err().to_string()
+        parse_scene(text, Path::new("s.toml"))
+            .unwrap_err()
+            .to_string()
     }
 
     #[test]
@@ -863,13 +871,22 @@ radiance = 0.2
         );
         let bad = GOOD.replace("material = \"gold\"", "material = \"gould\"");
         let e = err(&bad);
-        assert!(e.starts_with("s.toml:31: key 'mesh[1].material': no material named 'gould'"), "{e}");
+        assert!(
+            e.starts_with("s.toml:31: key 'mesh[1].material': no material named 'gould'"),
+            "{e}"
+        );
         let bad = GOOD.replace("fov = 40", "fovv = 40");
         let e = err(&bad);
-        assert!(e.starts_with("s.toml:10: key 'camera.fovv': unknown field"), "{e}");
+        assert!(
+            e.starts_with("s.toml:10: key 'camera.fovv': unknown field"),
+            "{e}"
+        );
         let bad = GOOD.replace("spp = 4", "spp = \"many\"");
         let e = err(&bad);
-        assert!(e.starts_with("s.toml:5: key 'render.spp': invalid type"), "{e}");
+        assert!(
+            e.starts_with("s.toml:5: key 'render.spp': invalid type"),
+            "{e}"
+        );
         let bad = GOOD.replace("albedo = 0.5", "albedo = 1.5");
         assert!(err(&bad).starts_with("s.toml:14: key 'materials.clay.albedo':"));
         let bad = GOOD.replace("preset = \"gold\"", "preset = \"gold\"\nior = 1.5");

@@ -85,7 +85,8 @@ impl World {
             c.focus_distance,
         )
         .ok_or_else(|| {
-            Error::new(ErrorKind::Usage, "degenerate camera").in_file(desc.path.display().to_string())
+            Error::new(ErrorKind::Usage, "degenerate camera")
+                .in_file(desc.path.display().to_string())
         })?;
         let mut stats = BuildStats::default();
         let scene_name = desc.path.display().to_string();
@@ -210,7 +211,10 @@ impl World {
                         .triangles
                         .iter()
                         .map(|t| {
-                            t.map(|i| m.transform.transform_point3(Vec3::from(d.positions[i as usize])))
+                            t.map(|i| {
+                                m.transform
+                                    .transform_point3(Vec3::from(d.positions[i as usize]))
+                            })
                         })
                         .collect();
                     if let Some(l) = MeshLight::new(inst, tris, radiance) {

@@ -1,0 +1,296 @@
+//! Rays that probe a diced surface: origins certified inside a closed mesh by their winding
+//! number, random and aimed directions, and the accuracy of hits against the exact limit
+//! surface. Used by the leak and accuracy tests, the benchmarks and `limitray accuracy`.
+
+use crate::bench::SplitMix64;
+use crate::bvh::exact::refine_hit;
+use crate::bvh::{MeshBvh, Ray};
+use crate::dice::DicedMesh;
+use crate::patch::PatchTable;
+use rayon::prelude::*;
+
+/// Generalised winding number of the closed triangle mesh `d` around `p`, in `f64`
+/// (sum of signed solid angles, Van Oosterom and Strackee 1983, over 4π): 1 inside a closed
+/// counter-clockwise mesh (−1 for a clockwise one), 0 outside.
+pub fn winding_number(d: &DicedMesh, p: [f64; 3]) -> f64 {
+    let total: f64 = d
+        .triangles
+        .par_iter()
+        .with_min_len(4096)
+        .map(|t| {
+            let [a, b, c] = t.map(|i| {
+                let q = d.positions[i as usize];
+                [q[0] as f64 - p[0], q[1] as f64 - p[1], q[2] as f64 - p[2]]
+            });
+            let (la, lb, lc) = (len(a), len(b), len(c));
+            let num = dot(a, cross(b, c));
+            let den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+            2.0 * num.atan2(den)
+        })
+        .sum();
+    total / (4.0 * std::f64::consts::PI)
+}
+
+/// Up to `n` points inside the closed diced mesh `d`: centroids of random triangles moved
+/// inwards along the triangle normal by `depth` (at least 8 ulps of the coordinates), kept
+/// only if their winding number is within 0.1 of ±1 (−1: a mesh wound clockwise).
+/// Deterministic in `seed`.
+pub fn inside_origins(d: &DicedMesh, n: usize, depth: f64, seed: u64) -> Vec<[f32; 3]> {
+    let mut rng = SplitMix64(seed);
+    let mut out = Vec::new();
+    if d.triangles.is_empty() {
+        return out;
+    }
+    for _ in 0..n * 4 {
+        if out.len() == n {
+            break;
+        }
+        let t = d.triangles[rng.below(d.triangles.len())];
+        let [a, b, c] = t.map(|i| d.positions[i as usize].map(|x| x as f64));
+        let centroid: [f64; 3] = std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0);
+        let ng = cross(sub(b, a), sub(c, a));
+        let l = len(ng);
+        if l == 0.0 {
+            continue;
+        }
+        let mag = centroid.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let step = depth.max(8.0 * mag * f32::EPSILON as f64);
+        let p: [f64; 3] = std::array::from_fn(|k| centroid[k] - ng[k] / l * step);
+        let p32 = p.map(|x| x as f32);
+        let w = winding_number(d, p32.map(|x| x as f64));
+        if (w.abs() - 1.0).abs() < 0.1 {
+            out.push(p32);
+        }
+    }
+    out
+}
+
+/// `n` directions uniform on the sphere, deterministic in `seed`.
+pub fn sphere_dirs(n: usize, seed: u64) -> Vec<[f32; 3]> {
+    let mut rng = SplitMix64(seed);
+    (0..n)
+        .map(|_| {
+            let z = 2.0 * rng.next_f64() - 1.0;
+            let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            [(r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32]
+        })
+        .collect()
+}
+
+/// Rays from `origin` aimed exactly at every vertex of `d` and at the midpoint of every
+/// triangle edge, at most `limit` of them (evenly strided).
+pub fn aimed_rays(d: &DicedMesh, origin: [f32; 3], limit: usize) -> Vec<Ray> {
+    let mut targets: Vec<[f32; 3]> = d.positions.clone();
+    for t in &d.triangles {
+        for k in 0..3 {
+            let (a, b) = (
+                d.positions[t[k] as usize],
+                d.positions[t[(k + 1) % 3] as usize],
+            );
+            targets.push(std::array::from_fn(|i| a[i] + 0.5 * (b[i] - a[i])));
+        }
+    }
+    let stride = targets.len().div_ceil(limit.max(1)).max(1);
+    targets
+        .iter()
+        .step_by(stride)
+        .filter_map(|p| {
+            let dir = [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]];
+            (dir != [0.0; 3]).then_some(Ray::new(origin, dir))
+        })
+        .collect()
+}
+
+/// Misses among rays from inside: closest-hit and any-hit queries that find nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LeakCount {
+    /// Rays cast.
+    pub rays: usize,
+    /// Closest-hit queries that missed.
+    pub missed: usize,
+    /// Any-hit queries that missed.
+    pub missed_any: usize,
+}
+
+/// Casts `rays` (all from inside a closed mesh) with both query kinds and counts misses.
+pub fn count_leaks(bvh: &MeshBvh, rays: &[Ray]) -> LeakCount {
+    let (missed, missed_any) = rays
+        .par_iter()
+        .with_min_len(1024)
+        .map(|r| {
+            (
+                bvh.intersect(r).is_none() as usize,
+                (!bvh.occluded(r)) as usize,
+            )
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    LeakCount {
+        rays: rays.len(),
+        missed,
+        missed_any,
+    }
+}
+
+/// Accuracy of diced hits against the exact limit surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Accuracy {
+    /// Rays that hit and whose exact intersection was found.
+    pub samples: usize,
+    /// Hits whose Newton refinement did not converge in the hit's face (grazing rays, or the
+    /// exact intersection lies in a neighbouring face).
+    pub unrefined: usize,
+    /// Largest `|hit point − P(face,k,u,v)|` (the reported parameters' surface point).
+    pub max_param: f64,
+    /// Mean of the same.
+    pub mean_param: f64,
+    /// Largest distance along the ray between the diced hit and the exact intersection.
+    pub max_surface: f64,
+    /// Mean of the same.
+    pub mean_surface: f64,
+    /// Largest ratio of the distance between the hit point and the surface point at its
+    /// reported parameters (which bounds its distance to the surface) over the hit
+    /// triangle's dicing error bound (see [`triangle_error_bound`]).
+    pub max_bound_ratio: f64,
+}
+
+/// Order of the barycentric lattice on which [`triangle_error_bound`] samples a triangle.
+const LATTICE: usize = 16;
+
+/// The dicing error bound of diced triangle `tri`: the largest distance between the exact
+/// surface at a parameter point and the triangle's linear interpolant there, sampled on the
+/// order-16 barycentric lattice (153 points), times 1.1. Between lattice points (spacing
+/// 1/16 of the triangle) a smooth error function, which vanishes at the corners, rises by at
+/// most ~1/256 of its curvature term above its sampled maximum; 10% covers that.
+pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f64 {
+    let info = &d.tri_info[tri];
+    let [a, b, c] = d.triangles[tri].map(|i| d.positions[i as usize].map(|x| x as f64));
+    let uv = info.uv.map(|p| [p[0] as f64, p[1] as f64]);
+    let mut worst = 0.0f64;
+    for i in 0..=LATTICE {
+        for j in 0..=LATTICE - i {
+            let (l1, l2) = (i as f64 / LATTICE as f64, j as f64 / LATTICE as f64);
+            let l0 = 1.0 - l1 - l2;
+            let u = l0 * uv[0][0] + l1 * uv[1][0] + l2 * uv[2][0];
+            let v = l0 * uv[0][1] + l1 * uv[1][1] + l2 * uv[2][1];
+            let Ok(s) = table.eval(info.face as usize, info.k as usize, u, v) else {
+                continue;
+            };
+            let lin: [f64; 3] = std::array::from_fn(|k| l0 * a[k] + l1 * b[k] + l2 * c[k]);
+            worst = worst.max(len(sub(s.p, lin)));
+        }
+    }
+    worst * 1.1
+}
+
+/// Measures [`Accuracy`] over `n` random rays aimed from outside at random diced triangles
+/// (deterministic in `seed`). `diag` scales the distance of the ray origins.
+pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u64) -> Accuracy {
+    let d = &bvh.diced;
+    if d.triangles.is_empty() {
+        return Accuracy::default();
+    }
+    let mut rng = SplitMix64(seed);
+    let rays: Vec<Ray> = (0..n)
+        .map(|_| {
+            let t = d.triangles[rng.below(d.triangles.len())];
+            let (mut w1, mut w2) = (rng.next_f64(), rng.next_f64());
+            if w1 + w2 > 1.0 {
+                (w1, w2) = (1.0 - w1, 1.0 - w2);
+            }
+            let [a, b, c] = t.map(|i| d.positions[i as usize].map(|x| x as f64));
+            let target: [f64; 3] =
+                std::array::from_fn(|k| a[k] + w1 * (b[k] - a[k]) + w2 * (c[k] - a[k]));
+            let ng = cross(sub(b, a), sub(c, a));
+            let l = len(ng).max(f64::MIN_POSITIVE);
+            // Origin in the hemisphere above the triangle, 30° to 90° elevation.
+            let z = 0.5 + 0.5 * rng.next_f64();
+            let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
+            let r = (1.0 - z * z).sqrt();
+            let n = ng.map(|x| x / l);
+            let (tu, tv) = basis(n);
+            let dir: [f64; 3] =
+                std::array::from_fn(|k| n[k] * z + tu[k] * r * phi.cos() + tv[k] * r * phi.sin());
+            let o: [f64; 3] = std::array::from_fn(|k| target[k] + dir[k] * 0.5 * diag);
+            Ray::new(
+                o.map(|x| x as f32),
+                std::array::from_fn(|k| (target[k] - o[k]) as f32),
+            )
+        })
+        .collect();
+    let per: Vec<Option<(f64, f64, f64, bool)>> = rays
+        .par_iter()
+        .map(|ray| {
+            let h = bvh.intersect(ray)?;
+            let o = ray.origin.map(|x| x as f64);
+            let dir = ray.dir.map(|x| x as f64);
+            let hp: [f64; 3] = std::array::from_fn(|k| o[k] + h.t as f64 * dir[k]);
+            let s = table
+                .eval(h.face as usize, h.k as usize, h.u as f64, h.v as f64)
+                .ok()?;
+            let param_err = len(sub(hp, s.p));
+            match refine_hit(table, ray, &h) {
+                Some(x) => {
+                    let along = (x.t - h.t as f64).abs() * len(dir);
+                    let bound = triangle_error_bound(table, d, h.triangle as usize);
+                    // Rounding: f32 vertices, f32 t along a ray from an f32 origin.
+                    let mag = hp.iter().chain(&o).fold(0.0f64, |m, v| m.max(v.abs()));
+                    let slack = 8.0 * mag * f32::EPSILON as f64;
+                    let ratio = param_err / (bound + slack);
+                    Some((param_err, along, ratio, true))
+                }
+                None => Some((param_err, 0.0, 0.0, false)),
+            }
+        })
+        .collect();
+    let mut acc = Accuracy::default();
+    let mut count_param = 0usize;
+    for (p, along, ratio, refined) in per.into_iter().flatten() {
+        count_param += 1;
+        acc.max_param = acc.max_param.max(p);
+        acc.mean_param += p;
+        if refined {
+            acc.samples += 1;
+            acc.max_surface = acc.max_surface.max(along);
+            acc.mean_surface += along;
+            acc.max_bound_ratio = acc.max_bound_ratio.max(ratio);
+        } else {
+            acc.unrefined += 1;
+        }
+    }
+    acc.mean_param /= count_param.max(1) as f64;
+    acc.mean_surface /= acc.samples.max(1) as f64;
+    acc
+}
+
+fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let a = if n[0].abs() > 0.9 {
+        [0.0, 1.0, 0.0]
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let u = cross(n, a);
+    let l = len(u);
+    let u = u.map(|x| x / l);
+    (u, cross(n, u))
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn len(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}

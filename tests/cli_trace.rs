@@ -1,0 +1,145 @@
+//! End-to-end tests of `limitray dice`, `trace` (with and without `--exact`), `accuracy` and
+//! `bench-trace` through the binary.
+
+use std::io::Write;
+use std::process::{Command, Output, Stdio};
+
+fn scene(name: &str) -> String {
+    format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run(args: &[&str], stdin: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_limitray"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn dice_writes_a_closed_obj() {
+    let cube = scene("creased_cube.obj");
+    let o = run(&["dice", &cube, "--rate", "3", "-o", "-"], "");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let faces = text.lines().filter(|l| l.starts_with("f ")).count();
+    assert_eq!(faces, 6 * 2 * 9);
+    let v = text.lines().filter(|l| l.starts_with("v ")).count();
+    let vn = text.lines().filter(|l| l.starts_with("vn ")).count();
+    assert_eq!(v, vn);
+    // Re-read as a mesh: every index in range.
+    for l in text.lines().filter(|l| l.starts_with("f ")) {
+        for t in l.split_whitespace().skip(1) {
+            let i: usize = t.split('/').next().unwrap().parse().unwrap();
+            assert!(i >= 1 && i <= v);
+        }
+    }
+}
+
+#[test]
+fn trace_hits_misses_and_bad_lines() {
+    let cube = scene("creased_cube.obj");
+    let input = "0 0 0 1 1 1\n0 0 5 0 0 -1\n0 0 5 0 0 1\n\n1 2 3\n0 0 0 0 0 0\n";
+    let o = run(&["trace", &cube, "--rate", "8"], input);
+    assert_eq!(o.status.code(), Some(2));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 6, "{out}");
+    assert!(lines[0].starts_with("hit "), "{}", lines[0]);
+    let f: Vec<f64> = lines[1]
+        .split_whitespace()
+        .skip(1)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    // The creased cube's top is flat at z = 1 inside its sharp edges: t = 4 from z = 5.
+    assert!((f[0] - 4.0).abs() < 1e-6, "{}", lines[1]);
+    assert!((f[7] - 1.0).abs() < 1e-6, "normal {}", lines[1]);
+    assert_eq!(lines[2], "miss");
+    assert_eq!(lines[3], "");
+    assert!(lines[4].starts_with("nan"));
+    assert!(lines[5].starts_with("nan"));
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(
+        err.contains("stdin:5:") && err.contains("stdin:6:"),
+        "{err}"
+    );
+}
+
+#[test]
+fn trace_exact_is_on_the_limit_surface() {
+    let cube = scene("creased_cube.obj");
+    let input = "0.1 0.2 0 0.3 0.5 0.8\n";
+    let diced = run(&["trace", &cube, "--rate", "2"], input);
+    let exact = run(&["trace", &cube, "--rate", "2", "--exact"], input);
+    let parse = |o: &Output| -> Vec<f64> {
+        String::from_utf8(o.stdout.clone())
+            .unwrap()
+            .split_whitespace()
+            .skip(1)
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    let (d, x) = (parse(&diced), parse(&exact));
+    // Evaluate the exact surface at the refined (face, k, u, v) and compare with o + t d.
+    let eval = run(
+        &["eval", &cube],
+        &format!("{} {} {} {}\n", x[1], x[2], x[3], x[4]),
+    );
+    let p: Vec<f64> = String::from_utf8(eval.stdout)
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let o = [0.1f32 as f64, 0.2f32 as f64, 0.0];
+    let dir = [0.3f32 as f64, 0.5f32 as f64, 0.8f32 as f64];
+    for k in 0..3 {
+        assert!(
+            (o[k] + x[0] * dir[k] - p[k]).abs() < 1e-12,
+            "axis {k}: {x:?} vs {p:?}"
+        );
+    }
+    // At rate 2 the diced hit is off the surface by the dicing error; the exact one is not.
+    assert!((d[0] - x[0]).abs() > 1e-6);
+}
+
+#[test]
+fn accuracy_and_bench_print_json() {
+    let cube = scene("creased_cube.obj");
+    let o = run(&["accuracy", &cube, "--rates", "2,8", "--rays", "500"], "");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    assert_eq!(out.lines().count(), 2);
+    for l in out.lines() {
+        let v: serde_json::Value = serde_json::from_str(l).unwrap();
+        assert!(v["max_bound_ratio"].as_f64().unwrap() <= 1.0, "{l}");
+    }
+    let o = run(
+        &[
+            "bench-trace",
+            &cube,
+            "--rate",
+            "4",
+            "--rays",
+            "2000",
+            "--reps",
+            "1",
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["triangles"], 6 * 2 * 16);
+    let bad = run(&["dice", "/nonexistent.obj", "-o", "-"], "");
+    assert_eq!(bad.status.code(), Some(2));
+    let bad = run(&["dice", &cube, "--rate", "0", "-o", "-"], "");
+    assert_eq!(bad.status.code(), Some(2));
+}

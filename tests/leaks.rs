@@ -1,0 +1,156 @@
+//! Zero leaks: rays from inside a closed diced limit surface always hit it — random
+//! directions (≥ 10^6 per shape and rate), rays aimed exactly at diced vertices and edge
+//! midpoints, rays through extraordinary vertices and along a cube's diagonals — at rates 1, 2,
+//! 4, 16 and 64, at the origin and translated to (148376, 1234, −223423). The count of misses
+//! must be 0, for closest-hit and for any-hit queries.
+
+mod common;
+
+use limitray::bvh::{MeshBvh, Ray};
+use limitray::dice::{dice, DiceOptions, DiceRate};
+use limitray::mesh::obj::read_obj;
+use limitray::mesh::ControlMesh;
+use limitray::patch::{PatchOptions, PatchTable};
+use limitray::probe::{aimed_rays, count_leaks, inside_origins, sphere_dirs};
+
+const RATES: [u32; 5] = [1, 2, 4, 16, 64];
+const FAR: [f64; 3] = [148376.0, 1234.0, -223423.0];
+/// Triangle budget per case: shapes whose dicing at a rate exceeds it skip that rate (printed).
+const MAX_TRIANGLES: usize = 1_500_000;
+
+fn closed(mesh: &ControlMesh) -> bool {
+    let topo =
+        limitray::mesh::Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
+            .unwrap();
+    mesh.holes.is_empty()
+        && (0..topo.num_edges())
+            .all(|e| topo.edge_face_count(e as u32) == 2 && !topo.edge_nonmanifold[e])
+        && topo.vert_tags.iter().all(|t| !t.nonmanifold)
+}
+
+fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, MeshBvh) {
+    let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
+    let d = dice(
+        &table,
+        mesh,
+        &DiceOptions {
+            rate: DiceRate::Uniform(rate),
+            max_rate: 256,
+        },
+    )
+    .unwrap();
+    (table, MeshBvh::build(d))
+}
+
+fn translated(mesh: &ControlMesh, by: [f64; 3]) -> ControlMesh {
+    let mut m = mesh.clone();
+    for p in &mut m.positions {
+        for k in 0..3 {
+            p[k] += by[k];
+        }
+    }
+    m
+}
+
+/// Runs every probe on one diced mesh; returns the rays cast. Panics on any miss.
+fn probe(name: &str, bvh: &MeshBvh, diag: f64, random_rays: usize) -> usize {
+    let d = &bvh.diced;
+    let origins = inside_origins(d, 16, 2e-3 * diag, 7);
+    assert!(
+        origins.len() >= 8,
+        "{name}: only {} inside origins",
+        origins.len()
+    );
+    let per = random_rays.div_ceil(origins.len());
+    let mut total = 0;
+    for (i, &o) in origins.iter().enumerate() {
+        let rays: Vec<Ray> = sphere_dirs(per, 1000 + i as u64)
+            .into_iter()
+            .map(|dir| Ray::new(o, dir))
+            .collect();
+        let c = count_leaks(bvh, &rays);
+        assert_eq!(
+            (c.missed, c.missed_any),
+            (0, 0),
+            "{name}: origin {o:?}: {c:?}"
+        );
+        total += c.rays;
+    }
+    // Aimed exactly at vertices (extraordinary vertices included) and edge midpoints.
+    for &o in origins.iter().take(4) {
+        let rays = aimed_rays(d, o, 200_000);
+        let c = count_leaks(bvh, &rays);
+        assert_eq!(
+            (c.missed, c.missed_any),
+            (0, 0),
+            "{name}: aimed from {o:?}: {c:?}"
+        );
+        total += c.rays;
+    }
+    total
+}
+
+#[test]
+fn cube_diagonals_and_grid_vertices() {
+    let cube = common::cube_builder().build().unwrap();
+    for by in [[0.0; 3], FAR] {
+        let mesh = translated(&cube, by);
+        for rate in RATES {
+            let (_, bvh) = build(&mesh, rate);
+            let c: [f32; 3] = by.map(|x| x as f32);
+            // The eight diagonals through the corners (extraordinary vertices of valence 3).
+            let rays: Vec<Ray> = (0..8)
+                .map(|i| {
+                    let s = |b: usize| if i & b == 0 { 1.0 } else { -1.0 };
+                    Ray::new(c, [s(1), s(2), s(4)])
+                })
+                .collect();
+            let l = count_leaks(&bvh, &rays);
+            assert_eq!((l.missed, l.missed_any), (0, 0), "rate {rate}, at {by:?}");
+            // From the centre to every diced vertex and edge midpoint.
+            let l = count_leaks(&bvh, &aimed_rays(&bvh.diced, c, usize::MAX));
+            assert_eq!((l.missed, l.missed_any), (0, 0), "rate {rate}, at {by:?}");
+            let total = probe(&format!("cube rate {rate} at {by:?}"), &bvh, 3.5, 1_000_000);
+            assert!(total >= 1_000_000);
+        }
+    }
+}
+
+#[test]
+fn corpus_closed_shapes_do_not_leak() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mut cases = 0;
+    let mut rays = 0usize;
+    for path in common::catmark_files(&models) {
+        let Ok(mesh) = read_obj(&path) else { continue };
+        if !closed(&mesh) {
+            continue;
+        }
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        for rate in RATES {
+            // Uniform rate r gives 2 r² triangles per quad (n-gon sub-faces: ~r²/2).
+            let estimate = 2 * (rate as usize).pow(2) * mesh.num_faces();
+            if estimate > MAX_TRIANGLES {
+                eprintln!(
+                    "note: {name} rate {rate}: ~{estimate} triangles, over the budget; skipped"
+                );
+                continue;
+            }
+            for by in [[0.0; 3], FAR] {
+                let m = translated(&mesh, by);
+                let (_, bvh) = build(&m, rate);
+                rays += probe(
+                    &format!("{name} rate {rate} at {by:?}"),
+                    &bvh,
+                    mesh.diagonal(),
+                    1_000_000,
+                );
+                cases += 1;
+            }
+        }
+    }
+    eprintln!("{cases} cases, {rays} rays, 0 misses");
+    assert!(cases >= 200, "only {cases} cases");
+}
