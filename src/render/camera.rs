@@ -46,13 +46,13 @@ impl Camera {
     ) -> Option<Camera> {
         let to = look_at - position;
         let dist = to.length();
-        if !(dist > 0.0 && dist.is_finite()) || !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+        if !(dist > 0.0 && dist.is_finite() && fov_y_deg > 0.0 && fov_y_deg < 180.0) {
             return None;
         }
         let forward = to / dist;
         let right = forward.cross(up);
         let rl = right.length();
-        if !(rl > 1e-6 * up.length()) || !rl.is_finite() {
+        if rl.is_nan() || rl <= 1e-6 * up.length() || !rl.is_finite() {
             return None;
         }
         let right = right / rl;
