@@ -12,5 +12,6 @@ for scene in default organic hardsurface; do
     if [ $# -ge 1 ]; then spp="--spp $1"; else spp=""; fi
     # shellcheck disable=SC2086
     ./target/release/limitray render "scenes/$scene.toml" \
-        -o "target/docs/$scene.exr" --png "docs/$scene.png" $spp
+        -o "target/docs/$scene.exr" --png "docs/$scene.png" \
+        --levels-png "docs/${scene}_levels.png" $spp
 done

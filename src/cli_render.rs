@@ -26,6 +26,10 @@ pub struct RenderArgs {
     /// Also write a tone-mapped sRGB PNG preview.
     #[arg(long)]
     pub png: Option<PathBuf>,
+    /// Also write the coloured-levels view: the patch level of each pixel's first hit as a
+    /// colour (blue 0, green 1, yellow 2, orange 3, red 4, magenta 5, violet 6, white ≥ 7).
+    #[arg(long)]
+    pub levels_png: Option<PathBuf>,
     /// Samples per pixel (overrides the scene).
     #[arg(long)]
     pub spp: Option<u32>,
@@ -157,6 +161,9 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
     crate::io::exr::write_film(&args.output, &film)?;
     if let Some(png) = &args.png {
         crate::io::png::write_preview(png, &film, settings.exposure)?;
+    }
+    if let Some(png) = &args.levels_png {
+        crate::io::png::write_levels_preview(png, &film, settings.exposure)?;
     }
     let samples = settings.width as f64 * settings.height as f64 * settings.spp as f64;
     let report = RenderReport {

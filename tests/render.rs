@@ -407,6 +407,19 @@ fn cli_renders_a_tiny_scene() {
     let img = image::open(&png).unwrap();
     assert_eq!((img.width(), img.height()), (24, 16));
 
+    // The whole command (dicing and BVH included) is deterministic across thread counts.
+    let exr1 = dir.path("tiny1.exr");
+    let out = limitray()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&exr1)
+        .args(["--spp", "2", "--res", "24x16", "--threads", "1", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(std::fs::read(&exr).unwrap() == std::fs::read(&exr1).unwrap());
+
     // Without --quiet: a summary naming the time to first pixel.
     let out = limitray()
         .arg("render")

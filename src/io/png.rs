@@ -46,6 +46,42 @@ pub fn write_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
         .map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string()))
 }
 
+/// Colours of patch levels 0, 1, 2, … in [`write_levels_preview`] (the last repeats).
+pub const LEVEL_COLOURS: [[f32; 3]; 8] = [
+    [0.20, 0.45, 0.90],
+    [0.20, 0.75, 0.35],
+    [0.95, 0.85, 0.20],
+    [0.95, 0.55, 0.15],
+    [0.90, 0.25, 0.20],
+    [0.80, 0.30, 0.75],
+    [0.55, 0.35, 0.95],
+    [0.95, 0.95, 0.95],
+];
+
+/// Writes the papers' coloured-levels view: each pixel's patch level (the `level` AOV) as a
+/// colour from [`LEVEL_COLOURS`], shaded by the tone-mapped beauty so the shapes stay
+/// readable; misses are black.
+pub fn write_levels_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
+    let mut buf = Vec::with_capacity(film.pixels.len() * 3);
+    for p in &film.pixels {
+        if p.level < 0.0 {
+            buf.extend_from_slice(&[0, 0, 0]);
+            continue;
+        }
+        let c = LEVEL_COLOURS[(p.level as usize).min(LEVEL_COLOURS.len() - 1)];
+        let lum = 0.2126 * p.rgba[0] + 0.7152 * p.rgba[1] + 0.0722 * p.rgba[2];
+        let shade = 0.35 + 0.65 * srgb_encode(aces(lum * exposure.exp2()));
+        for ch in c {
+            buf.push((srgb_encode(ch * shade) * 255.0 + 0.5).clamp(0.0, 255.0) as u8);
+        }
+    }
+    let img = image::RgbImage::from_raw(film.width, film.height, buf).ok_or_else(|| {
+        Error::new(ErrorKind::Io, "image size mismatch").in_file(path.display().to_string())
+    })?;
+    img.save_with_format(path, image::ImageFormat::Png)
+        .map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
