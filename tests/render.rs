@@ -477,3 +477,29 @@ fn cli_reports_scene_errors_with_key_and_line() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("issue 7"));
 }
+
+/// The committed OBJ files of the bundled scenes are what the generators in
+/// `limitray::mesh::shapes` produce (regenerate with
+/// `cargo run --release --example make_scenes -- scenes`).
+#[test]
+fn bundled_meshes_match_their_generators() {
+    use limitray::mesh::shapes;
+    let cases = [
+        ("rounded_box_s0.obj", shapes::rounded_box(0.0)),
+        ("rounded_box_s1.obj", shapes::rounded_box(1.0)),
+        ("rounded_box_s2.obj", shapes::rounded_box(2.0)),
+        ("rounded_box_s3.5.obj", shapes::rounded_box(3.5)),
+        ("rounded_box_sinf.obj", shapes::rounded_box(f32::INFINITY)),
+        ("blob.obj", shapes::blob()),
+        ("gear12.obj", shapes::gear(12)),
+        ("gear8.obj", shapes::gear(8)),
+        ("cyclorama.obj", shapes::cyclorama(24.0, 16.0, 9.0)),
+    ];
+    for (name, want) in cases {
+        let got = limitray::mesh::obj::read_obj(Path::new(&mesh_path(name))).unwrap();
+        assert_eq!(got.positions, want.positions, "{name}");
+        assert_eq!(got.face_offsets, want.face_offsets, "{name}");
+        assert_eq!(got.face_verts, want.face_verts, "{name}");
+        assert_eq!(got.creases, want.creases, "{name}");
+    }
+}
