@@ -503,3 +503,39 @@ fn bundled_meshes_match_their_generators() {
         assert_eq!(got.creases, want.creases, "{name}");
     }
 }
+
+/// Lossless interfaces in the furnace: a smooth glass object (ior 1.5; refraction scales
+/// radiance by 1/η² going in and η² coming out, Fresnel splits but loses nothing) and a perfect
+/// mirror (Schlick with F0 = 1) return the environment's radiance 1 along every path that
+/// escapes; `max_depth` 64 leaves a negligible tail of internally reflected paths. Rough
+/// (single-scattering GGX) variants lose energy to masking but must never exceed 1.
+#[test]
+fn furnace_lossless_and_rough_interfaces() {
+    let dir = TempDir::new("furnace-glass");
+    let cases = [
+        ("type = \"dielectric\"\nior = 1.5", true),
+        ("type = \"conductor\"\nbase_color = 1.0", true),
+        ("type = \"dielectric\"\nior = 1.5\nroughness = 0.5", false),
+        (
+            "type = \"conductor\"\nbase_color = 1.0\nroughness = 0.5",
+            false,
+        ),
+    ];
+    for (mat, lossless) in cases {
+        let text = furnace(1.0, 64, "radiance = 1.0", "rounded_box_s0.obj")
+            .replace("type = \"diffuse\"\nalbedo = 1", mat);
+        let w = world(&text, &dir.0);
+        let f = render_one_thread(&w);
+        let (obj, _, n) = means(&f);
+        eprintln!(
+            "furnace {}: {obj:.5} over {n} pixels",
+            mat.replace('\n', " ")
+        );
+        assert!(n > 500);
+        if lossless {
+            assert!((obj - 1.0).abs() < 0.01, "{mat}: {obj}");
+        } else {
+            assert!(obj <= 1.01 && obj > 0.7, "{mat}: {obj}");
+        }
+    }
+}
