@@ -328,6 +328,8 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<String> {
             format!("\"table_ms\":{:.1}", (t1 - t0).as_secs_f64() * 1e3),
             format!("\"dice_ms\":{:.1}", (t2 - t1).as_secs_f64() * 1e3),
             format!("\"bvh_ms\":{:.1}", (t3 - t2).as_secs_f64() * 1e3),
+            format!("\"bvh_nodes\":{}", bvh.cwbvh.nodes.len()),
+            format!("\"widened_planes\":{}", bvh.widened_planes),
             format!(
                 "\"bytes_per_triangle\":{:.1}",
                 bvh.bytes() as f64 / tris.max(1) as f64

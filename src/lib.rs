@@ -14,6 +14,8 @@ pub mod cli_eval;
 pub mod cli_render;
 pub mod cli_trace;
 pub mod dice;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod error;
 pub mod info;
 pub mod io;

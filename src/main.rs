@@ -170,6 +170,12 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Cross-check the limit surface and the triangle intersector against Embree 4.
+    #[cfg(feature = "embree")]
+    Crosscheck(limitray::embree::cli::CrosscheckArgs),
+    /// Side-by-side benchmark: limitray, Embree on the same triangles, Embree subdivision.
+    #[cfg(feature = "embree")]
+    Bench(limitray::embree::cli::BenchArgs),
     /// Path trace a scene file to EXR (beauty + AOVs), optionally with a PNG preview.
     Render(limitray::cli_render::RenderArgs),
 }
@@ -376,6 +382,10 @@ fn run(cli: Cli) -> Result<(), Error> {
             }
             Ok(())
         }
+        #[cfg(feature = "embree")]
+        Command::Crosscheck(args) => limitray::embree::cli::run_crosscheck(&args),
+        #[cfg(feature = "embree")]
+        Command::Bench(args) => limitray::embree::cli::run_bench(&args),
     }
 }
 

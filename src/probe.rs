@@ -24,6 +24,11 @@ pub fn winding_number(d: &DicedMesh, p: [f64; 3]) -> f64 {
             });
             let (la, lb, lc) = (len(a), len(b), len(c));
             let num = dot(a, cross(b, c));
+            if num == 0.0 {
+                // p in the triangle's plane (or a degenerate triangle): no solid angle;
+                // atan2(±0, negative) would give a spurious ±π.
+                return 0.0;
+            }
             let den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
             2.0 * num.atan2(den)
         })
@@ -33,7 +38,10 @@ pub fn winding_number(d: &DicedMesh, p: [f64; 3]) -> f64 {
 
 /// Up to `n` points inside the closed diced mesh `d`: centroids of random triangles moved
 /// inwards along the triangle normal by `depth` (at least 8 ulps of the coordinates), kept
-/// only if their winding number is within 0.1 of ±1 (−1: a mesh wound clockwise).
+/// only if their winding number is ±1 within 1e-6 (−1: a mesh wound clockwise). Off the
+/// surface the winding number of a closed mesh is an integer to ~1e-12; a fractional value
+/// means the point lies on the surface (possible far from the origin, where the mesh is only
+/// a few float steps thick), and such a point is rejected.
 /// Deterministic in `seed`.
 pub fn inside_origins(d: &DicedMesh, n: usize, depth: f64, seed: u64) -> Vec<[f32; 3]> {
     let mut rng = SplitMix64(seed);
@@ -53,13 +61,19 @@ pub fn inside_origins(d: &DicedMesh, n: usize, depth: f64, seed: u64) -> Vec<[f3
         if l == 0.0 {
             continue;
         }
-        let mag = centroid.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let step = depth.max(8.0 * mag * f32::EPSILON as f64);
-        let p: [f64; 3] = std::array::from_fn(|k| centroid[k] - ng[k] / l * step);
-        let p32 = p.map(|x| x as f32);
-        let w = winding_number(d, p32.map(|x| x as f64));
-        if (w.abs() - 1.0).abs() < 0.1 {
-            out.push(p32);
+        let ulp = centroid.iter().fold(0.0f64, |m, x| m.max(x.abs())) * f32::EPSILON as f64;
+        // Inwards is against the normal of a counter-clockwise mesh, along it otherwise; a
+        // shape only a few float steps thick (far from the origin) needs a shorter step.
+        'found: for step in [depth.max(8.0 * ulp), depth.max(2.0 * ulp), ulp] {
+            for sign in [-1.0, 1.0] {
+                let p: [f64; 3] = std::array::from_fn(|k| centroid[k] + sign * ng[k] / l * step);
+                let p32 = p.map(|x| x as f32);
+                let w = winding_number(d, p32.map(|x| x as f64));
+                if (w.abs() - 1.0).abs() < 1e-6 {
+                    out.push(p32);
+                    break 'found;
+                }
+            }
         }
     }
     out

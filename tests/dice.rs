@@ -156,3 +156,32 @@ fn bad_rates_are_errors() {
         assert!(dice(&table, &mesh, &opts).is_err(), "{rate:?}");
     }
 }
+
+/// Screen-space rates: edges near the camera get more segments than far ones, the mesh
+/// stays closed, and pixel targets scale the rate.
+#[test]
+fn screen_rate_follows_distance() {
+    use limitray::dice::ScreenRate;
+    let mesh = common::cube_builder().build().unwrap();
+    let eye = [0.0, 0.0, 2.5];
+    let rate = |ppe: f64| {
+        DiceRate::Screen(ScreenRate {
+            eye,
+            pixels_per_radian: 500.0,
+            pixels_per_edge: ppe,
+        })
+    };
+    let (_, d) = diced(&mesh, rate(4.0));
+    assert_eq!(open_edges(&d), 0);
+    // Triangles of the near face (+z, face 0) outnumber those of the far face (−z, face 2).
+    let count = |f: u32| d.tri_info.iter().filter(|t| t.face == f).count();
+    assert!(
+        count(0) > 2 * count(2),
+        "near {} far {}",
+        count(0),
+        count(2)
+    );
+    let (_, fine) = diced(&mesh, rate(1.0));
+    assert!(fine.triangles.len() > 8 * d.triangles.len() / 2);
+    assert_eq!(open_edges(&fine), 0);
+}

@@ -265,14 +265,10 @@ pub(crate) fn node_hitmask(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tma
     }
 }
 
-/// Scalar reference of [`node_hitmask`]: the same operations in the same order.
+/// Scalar reference of the node test: the same operations in the same order as the SIMD
+/// version (and as the WGSL port).
 #[inline(always)]
-pub(crate) fn node_hitmask_scalar(
-    node: &CwBvhNode,
-    r: &PreparedRay,
-    oct_inv4: u32,
-    tmax: f32,
-) -> u32 {
+pub fn node_hitmask_scalar(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
     let mut mask = 0u32;
     for c in 0..8 {

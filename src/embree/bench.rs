@@ -1,0 +1,574 @@
+//! Side-by-side benchmark: limitray (patch table + dicing + CWBVH), Embree on the same
+//! triangles, and Embree's own subdivision geometry at the same rate, on the same rays (plus
+//! Embree's triangles with `RTC_SCENE_FLAG_ROBUST`, for the leak counts).
+//!
+//! Every engine is timed inside one rayon pool of `threads` threads (Embree's build threads
+//! limited to the same number through its device configuration); timings are medians of
+//! `reps` repetitions. Leak counts use [`rays::towards_points`]: rays from just behind the
+//! surface through diced vertices and points on diced edges, away from the mesh boundary, so
+//! every one of them must hit; each miss is a leak. They are counted with the mesh where it is
+//! and translated to [`FAR_OFFSET`] (large coordinates stress float precision).
+
+use super::crosscheck::embree_table;
+use super::rays::{self, LeakTarget, TestRay};
+use super::subdiv::{check_rate, subdivision_scene};
+use super::triangles::triangle_scene;
+use super::{Device, Scene, SceneOptions};
+use crate::bvh::{MeshBvh, Ray};
+use crate::dice::{dice, DiceOptions, DiceRate};
+use crate::error::{Error, ErrorKind, Result};
+use crate::mesh::ControlMesh;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Where the translated copy for the second leak count goes (as in `../shared/DESIGN.md`).
+pub const FAR_OFFSET: [f64; 3] = [148376.0, 1234.0, -223423.0];
+
+/// Settings of [`bench`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BenchOptions {
+    /// Uniform rate: limitray's dicing rate and Embree's tessellation rate.
+    pub rate: u32,
+    /// Rays per measurement (coherent and incoherent each).
+    pub rays: usize,
+    /// Threads (0: all available).
+    pub threads: usize,
+    /// Repetitions of every measurement (medians are reported).
+    pub reps: usize,
+    /// Rays per leak count.
+    pub leak_rays: usize,
+    /// Seed of the random rays.
+    pub seed: u64,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        BenchOptions {
+            rate: 16,
+            rays: 1_000_000,
+            threads: 0,
+            reps: 3,
+            leak_rays: 100_000,
+            seed: 1,
+        }
+    }
+}
+
+/// Results of one engine.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EngineResult {
+    /// `limitray`, `embree-triangles`, `embree-subdiv` or `embree-tri-robust` (the same
+    /// triangles with `RTC_SCENE_FLAG_ROBUST`).
+    pub name: &'static str,
+    /// Median build time in seconds (for limitray: patch table + dicing + BVH; for Embree
+    /// triangles: scene from the already diced triangles; for Embree subdivision: geometry
+    /// and scene commit from the control mesh).
+    pub build_s: f64,
+    /// Parts of the build (median seconds), where there are several.
+    pub build_parts: Vec<(&'static str, f64)>,
+    /// Coherent (camera) rays per second, median.
+    pub coherent_rays_per_s: f64,
+    /// Incoherent rays per second, median.
+    pub incoherent_rays_per_s: f64,
+    /// Camera rays that hit.
+    pub coherent_hits: usize,
+    /// Incoherent rays that hit.
+    pub incoherent_hits: usize,
+    /// Leaks of the leak rays, mesh in place.
+    pub leaks: usize,
+    /// Leaks of the leak rays, mesh translated to [`FAR_OFFSET`].
+    pub leaks_far: usize,
+}
+
+/// Everything [`bench`] measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchReport {
+    /// Control faces.
+    pub faces: usize,
+    /// Diced triangles (limitray and Embree triangles).
+    pub triangles: usize,
+    /// Settings used (threads resolved).
+    pub options: BenchOptions,
+    /// Camera image size for the coherent rays.
+    pub camera: (usize, usize),
+    /// Leak rays in each count.
+    pub leak_rays: usize,
+    /// Embree version.
+    pub embree_version: u32,
+    /// limitray, Embree triangles, Embree subdivision, Embree robust triangles.
+    pub engines: Vec<EngineResult>,
+}
+
+impl BenchReport {
+    /// JSON object.
+    pub fn json(&self) -> serde_json::Value {
+        let engines: Vec<serde_json::Value> = self
+            .engines
+            .iter()
+            .map(|e| {
+                let parts: serde_json::Map<String, serde_json::Value> = e
+                    .build_parts
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
+                    .collect();
+                serde_json::json!({
+                    "name": e.name,
+                    "build_s": e.build_s,
+                    "build_parts": parts,
+                    "coherent_rays_per_s": e.coherent_rays_per_s,
+                    "incoherent_rays_per_s": e.incoherent_rays_per_s,
+                    "coherent_hits": e.coherent_hits,
+                    "incoherent_hits": e.incoherent_hits,
+                    "leaks": e.leaks,
+                    "leaks_far": e.leaks_far,
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "faces": self.faces,
+            "triangles": self.triangles,
+            "rate": self.options.rate,
+            "rays": self.options.rays,
+            "threads": self.options.threads,
+            "reps": self.options.reps,
+            "camera": [self.camera.0, self.camera.1],
+            "leak_rays": self.leak_rays,
+            "far_offset": FAR_OFFSET,
+            "embree_version": self.embree_version,
+            "engines": engines,
+        })
+    }
+
+    /// A plain-text table: one row per engine, ratios against limitray.
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "faces {}  triangles {}  rate {}  threads {}  rays {} (camera {}x{})  reps {} (medians)  Embree {}\n",
+            self.faces,
+            self.triangles,
+            self.options.rate,
+            self.options.threads,
+            self.options.rays,
+            self.camera.0,
+            self.camera.1,
+            self.options.reps,
+            self.embree_version
+        );
+        s.push_str(&format!(
+            "{:<18} {:>10} {:>14} {:>14} {:>9} {:>9} {:>9} {:>11}\n",
+            "engine",
+            "build ms",
+            "coherent Mr/s",
+            "incoher. Mr/s",
+            "build x",
+            "coh. x",
+            "incoh. x",
+            "leaks/far"
+        ));
+        let base = &self.engines[0];
+        for e in &self.engines {
+            s.push_str(&format!(
+                "{:<18} {:>10.1} {:>14.3} {:>14.3} {:>9.2} {:>9.2} {:>9.2} {:>5}/{:<5}\n",
+                e.name,
+                e.build_s * 1e3,
+                e.coherent_rays_per_s * 1e-6,
+                e.incoherent_rays_per_s * 1e-6,
+                e.build_s / base.build_s,
+                e.coherent_rays_per_s / base.coherent_rays_per_s,
+                e.incoherent_rays_per_s / base.incoherent_rays_per_s,
+                e.leaks,
+                e.leaks_far
+            ));
+        }
+        s.push_str(&format!(
+            "ratios are engine / limitray (build: lower is faster; rays: higher is faster); leaks of {} rays each\n",
+            self.leak_rays
+        ));
+        s
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v[v.len() / 2]
+    }
+}
+
+/// Whether the rounded point `p` lies on segment `ab` within 1e-3 of its length (far from the
+/// origin, rounding moves points on edges by a good part of a micro-triangle).
+fn on_segment(p: [f32; 3], a: [f32; 3], b: [f32; 3]) -> bool {
+    let (p, a, b) = (p.map(f64::from), a.map(f64::from), b.map(f64::from));
+    let ab: [f64; 3] = std::array::from_fn(|k| b[k] - a[k]);
+    let ap: [f64; 3] = std::array::from_fn(|k| p[k] - a[k]);
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    if len2 == 0.0 {
+        return false;
+    }
+    let c = rays::cross(ab, ap);
+    let dist2 = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / len2;
+    dist2 <= 1e-6 * len2
+}
+
+/// Leak-ray targets of a diced mesh: one vertex and one random point on one edge of every
+/// triangle, except on control faces that touch a boundary vertex (or a hole) of `mesh`.
+///
+/// Vertices are welded by position bits (infinitely sharp features duplicate vertices with the
+/// same position). For each welded vertex the cone of its triangles' unit normals is bounded:
+/// axis = normalised sum, half-angle `c` = largest angle of a normal to the axis; the target's
+/// directions may tilt `78° - c` (at most 60°) from the axis, so every triangle normal stays
+/// within 78° of the ray. Vertices whose cone is wider than 48° are skipped. An edge point
+/// uses the sum of both ends' axes and a conservative bound of the combined cone, and is kept
+/// only if its `f32` rounding leaves it within 1e-3 of the edge's length from the edge.
+pub fn leak_targets(mesh: &ControlMesh, bvh: &MeshBvh, seed: u64) -> Vec<LeakTarget> {
+    let mut edge_count: HashMap<(u32, u32), u32> = HashMap::new();
+    for f in 0..mesh.num_faces() {
+        let fv = mesh.face(f);
+        for i in 0..fv.len() {
+            let (a, b) = (fv[i], fv[(i + 1) % fv.len()]);
+            *edge_count.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut boundary = vec![false; mesh.num_vertices()];
+    for (&(a, b), &c) in &edge_count {
+        if c != 2 {
+            boundary[a as usize] = true;
+            boundary[b as usize] = true;
+        }
+    }
+    for &h in &mesh.holes {
+        for &v in mesh.face(h as usize) {
+            boundary[v as usize] = true;
+        }
+    }
+    let excluded: Vec<bool> = (0..mesh.num_faces())
+        .map(|f| mesh.face(f).iter().any(|&v| boundary[v as usize]))
+        .collect();
+
+    let d = &bvh.diced;
+    // Weld by position bits.
+    let key = |i: usize| d.positions[i].map(f32::to_bits);
+    let mut order: Vec<u32> = (0..d.positions.len() as u32).collect();
+    order.par_sort_unstable_by_key(|&i| key(i as usize));
+    let mut weld = vec![0u32; d.positions.len()];
+    let mut id = 0u32;
+    for (j, &i) in order.iter().enumerate() {
+        if j > 0 && key(i as usize) != key(order[j - 1] as usize) {
+            id += 1;
+        }
+        weld[i as usize] = id;
+    }
+    let nw = if order.is_empty() { 0 } else { id as usize + 1 };
+    drop(order);
+    let tri_normal = |t: &[u32; 3]| -> Option<[f64; 3]> {
+        let p = t.map(|i| d.positions[i as usize].map(|c| c as f64));
+        let n = rays::cross(
+            std::array::from_fn(|k| p[1][k] - p[0][k]),
+            std::array::from_fn(|k| p[2][k] - p[0][k]),
+        );
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        (l > 0.0).then(|| n.map(|c| c / l))
+    };
+    let normals: Vec<Option<[f64; 3]>> = d.triangles.par_iter().map(tri_normal).collect();
+    let mut axis = vec![[0.0f64; 3]; nw];
+    let mut degenerate = vec![false; nw];
+    for (t, n) in d.triangles.iter().zip(&normals) {
+        for &v in t {
+            let w = weld[v as usize] as usize;
+            match n {
+                Some(n) => {
+                    for k in 0..3 {
+                        axis[w][k] += n[k];
+                    }
+                }
+                None => degenerate[w] = true,
+            }
+        }
+    }
+    for a in &mut axis {
+        let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        if l > 0.0 {
+            *a = a.map(|c| c / l);
+        }
+    }
+    // Half-angle of each cone.
+    let mut cone = vec![0.0f64; nw];
+    for (t, n) in d.triangles.iter().zip(&normals) {
+        if let Some(n) = n {
+            for &v in t {
+                let w = weld[v as usize] as usize;
+                let dot =
+                    (n[0] * axis[w][0] + n[1] * axis[w][1] + n[2] * axis[w][2]).clamp(-1.0, 1.0);
+                cone[w] = cone[w].max(dot.acos());
+            }
+        }
+    }
+    let limit = 78f64.to_radians();
+    let widest = 48f64.to_radians();
+    let angle = |a: [f64; 3], b: [f64; 3]| {
+        (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+            .clamp(-1.0, 1.0)
+            .acos()
+    };
+    let mut targets = Vec::new();
+    let mut rng = rays::SplitMix64::new(seed);
+    for (t, info) in d.triangles.iter().zip(&d.tri_info) {
+        if excluded[info.face as usize] {
+            continue;
+        }
+        let i = rng.below(3);
+        let (a, b) = (t[i] as usize, t[(i + 1) % 3] as usize);
+        let (wa, wb) = (weld[a] as usize, weld[b] as usize);
+        let s = rng.next_f64() as f32;
+        if degenerate[wa] || degenerate[wb] {
+            continue;
+        }
+        if cone[wa] <= widest {
+            targets.push(LeakTarget {
+                point: d.positions[a],
+                normal: axis[wa],
+                max_tilt: (limit - cone[wa]).min(60f64.to_radians()),
+            });
+        }
+        let sum: [f64; 3] = std::array::from_fn(|k| axis[wa][k] + axis[wb][k]);
+        let l = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+        if l == 0.0 {
+            continue;
+        }
+        let ax = sum.map(|c| c / l);
+        let c = (cone[wa] + angle(axis[wa], ax)).max(cone[wb] + angle(axis[wb], ax));
+        let p: [f32; 3] = std::array::from_fn(|k| {
+            d.positions[a][k] + s * (d.positions[b][k] - d.positions[a][k])
+        });
+        if c <= widest && on_segment(p, d.positions[a], d.positions[b]) {
+            targets.push(LeakTarget {
+                point: p,
+                normal: ax,
+                max_tilt: (limit - c).min(60f64.to_radians()),
+            });
+        }
+    }
+    targets
+}
+
+trait Engine: Sync {
+    fn hit(&self, r: &TestRay) -> bool;
+}
+
+impl Engine for MeshBvh {
+    fn hit(&self, r: &TestRay) -> bool {
+        self.intersect(&Ray::new(r.origin, r.dir)).is_some()
+    }
+}
+
+impl Engine for Scene {
+    fn hit(&self, r: &TestRay) -> bool {
+        self.intersect(r.origin, r.dir, 0.0, f32::INFINITY)
+            .is_some()
+    }
+}
+
+fn trace(engine: &dyn Engine, rays: &[TestRay]) -> (f64, usize) {
+    let t0 = Instant::now();
+    let hits = rays
+        .par_iter()
+        .with_min_len(256)
+        .filter(|r| engine.hit(r))
+        .count();
+    (t0.elapsed().as_secs_f64(), hits)
+}
+
+fn throughput(engine: &dyn Engine, rays: &[TestRay], reps: usize) -> (f64, usize) {
+    let mut times = Vec::new();
+    let mut hits = 0;
+    for _ in 0..reps {
+        let (t, h) = trace(engine, rays);
+        times.push(t);
+        hits = h;
+    }
+    (rays.len() as f64 / median(times), hits)
+}
+
+fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
+    rays.len() - trace(engine, rays).1
+}
+
+struct Built {
+    bvh: MeshBvh,
+    tris: Scene,
+    robust: Scene,
+    sub: Scene,
+    /// Seconds per repetition: patch table, dicing, BVH, Embree triangles, Embree subdivision,
+    /// Embree triangles with `RTC_SCENE_FLAG_ROBUST`.
+    parts: [Vec<f64>; 6],
+}
+
+fn build_all(mesh: &ControlMesh, rate: u32, device: &Device, reps: usize) -> Result<Built> {
+    let mut parts: [Vec<f64>; 6] = Default::default();
+    let mut last: Option<(MeshBvh, Scene, Scene, Scene)> = None;
+    for _ in 0..reps.max(1) {
+        // Free the previous repetition first: peak memory stays at one copy.
+        drop(last.take());
+        let t0 = Instant::now();
+        let table = embree_table(mesh)?;
+        let t1 = Instant::now();
+        let diced = dice(
+            &table,
+            mesh,
+            &DiceOptions {
+                rate: DiceRate::Uniform(rate),
+                ..DiceOptions::default()
+            },
+        )?;
+        drop(table);
+        let t2 = Instant::now();
+        let bvh = MeshBvh::build(diced);
+        let t3 = Instant::now();
+        let tris = triangle_scene(device, &bvh.diced, SceneOptions::default())?;
+        let t4 = Instant::now();
+        let sub = subdivision_scene(
+            device,
+            mesh,
+            mesh.options.boundary,
+            rate as f32,
+            SceneOptions::default(),
+        )?;
+        let t5 = Instant::now();
+        let robust = triangle_scene(
+            device,
+            &bvh.diced,
+            SceneOptions {
+                robust: true,
+                ..SceneOptions::default()
+            },
+        )?;
+        let t6 = Instant::now();
+        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5), (t5, t6)]
+            .into_iter()
+            .enumerate()
+        {
+            parts[i].push((b - a).as_secs_f64());
+        }
+        last = Some((bvh, tris, sub, robust));
+    }
+    let (bvh, tris, sub, robust) = last.expect("at least one repetition");
+    Ok(Built {
+        bvh,
+        tris,
+        robust,
+        sub,
+        parts,
+    })
+}
+
+/// Runs the side-by-side benchmark on `mesh`.
+pub fn bench(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport> {
+    check_rate(opts.rate as f32)?;
+    if opts.rays == 0 || opts.reps == 0 {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "--rays and --reps must be at least 1",
+        ));
+    }
+    let threads = if opts.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        opts.threads
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::new(ErrorKind::Usage, format!("thread pool: {e}")))?;
+    let opts = BenchOptions { threads, ..*opts };
+    pool.install(|| bench_in_pool(mesh, &opts))
+}
+
+fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport> {
+    let device = Device::with_threads(opts.threads)?;
+    let built = build_all(mesh, opts.rate, &device, opts.reps)?;
+    let bounds = mesh.bounds();
+    let camera = rays::camera_size(opts.rays);
+    let coherent = rays::camera(bounds, camera.0, camera.1);
+    let incoherent = rays::incoherent(bounds, opts.rays, opts.seed);
+
+    let diag = mesh.diagonal();
+    let depth = 0.05 * diag;
+    let targets = leak_targets(mesh, &built.bvh, opts.seed);
+    let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
+
+    let p = &built.parts;
+    let med = |i: usize| median(p[i].clone());
+    let limitray_total = median(
+        (0..p[0].len())
+            .map(|r| p[0][r] + p[1][r] + p[2][r])
+            .collect(),
+    );
+    let builds = [
+        (
+            limitray_total,
+            vec![("patch_table", med(0)), ("dice", med(1)), ("bvh", med(2))],
+        ),
+        (med(3), vec![]),
+        (med(4), vec![]),
+        (med(5), vec![]),
+    ];
+    let names = [
+        "limitray",
+        "embree-triangles",
+        "embree-subdiv",
+        "embree-tri-robust",
+    ];
+    let mut results = Vec::new();
+    {
+        let engines: [&dyn Engine; 4] = [&built.bvh, &built.tris, &built.sub, &built.robust];
+        for ((name, engine), (build_s, parts)) in names.into_iter().zip(engines).zip(builds) {
+            let (coh, coh_hits) = throughput(engine, &coherent, opts.reps);
+            let (inc, inc_hits) = throughput(engine, &incoherent, opts.reps);
+            results.push(EngineResult {
+                name,
+                build_s,
+                build_parts: parts,
+                coherent_rays_per_s: coh,
+                incoherent_rays_per_s: inc,
+                coherent_hits: coh_hits,
+                incoherent_hits: inc_hits,
+                leaks: leaks(engine, &leak_rays),
+                leaks_far: 0,
+            });
+        }
+    }
+    let triangles = built.bvh.diced.triangles.len();
+    drop(built);
+    drop((coherent, incoherent));
+
+    // The translated copy, for the far leak count (built after the first is freed).
+    let mut far = mesh.clone();
+    for p in &mut far.positions {
+        for k in 0..3 {
+            p[k] += FAR_OFFSET[k];
+        }
+    }
+    let far_built = build_all(&far, opts.rate, &device, 1)?;
+    let far_targets = leak_targets(&far, &far_built.bvh, opts.seed);
+    let far_rays = rays::towards_points(&far_targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
+    let far_engines: [&dyn Engine; 4] = [
+        &far_built.bvh,
+        &far_built.tris,
+        &far_built.sub,
+        &far_built.robust,
+    ];
+    for (r, engine) in results.iter_mut().zip(far_engines) {
+        r.leaks_far = leaks(engine, &far_rays);
+    }
+    Ok(BenchReport {
+        faces: mesh.num_faces(),
+        triangles,
+        options: *opts,
+        camera,
+        leak_rays: leak_rays.len(),
+        embree_version: device.version(),
+        engines: results,
+    })
+}

@@ -1,0 +1,95 @@
+//! Instances: one diced mesh placed several times by affine transforms shares its BVH; a world
+//! ray meets an instance where the object-space ray meets the mesh (same t), normals are
+//! transformed as normals, and the nearest instance wins.
+
+mod common;
+
+use glam::{Affine3A, Quat, Vec3};
+use limitray::bvh::{MeshBvh, Ray, SceneBvh};
+use limitray::dice::{dice, DiceOptions, DiceRate};
+use limitray::patch::{PatchOptions, PatchTable};
+use std::sync::Arc;
+
+fn cube_bvh() -> Arc<MeshBvh> {
+    let mesh = common::cube_builder().build().unwrap();
+    let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+    let d = dice(
+        &table,
+        &mesh,
+        &DiceOptions {
+            rate: DiceRate::Uniform(8),
+            max_rate: 64,
+        },
+    )
+    .unwrap();
+    Arc::new(MeshBvh::build(d))
+}
+
+#[test]
+fn instances_share_a_mesh_and_transform_hits() {
+    let mesh = cube_bvh();
+    let mut scene = SceneBvh::new();
+    let id = scene.add_mesh(mesh.clone());
+    let xf = [
+        Affine3A::from_translation(Vec3::new(10.0, 0.0, 0.0)),
+        Affine3A::from_scale_rotation_translation(
+            Vec3::new(2.0, 0.5, 1.0),
+            Quat::from_rotation_y(0.7),
+            Vec3::new(-10.0, 3.0, 1.0),
+        ),
+        Affine3A::from_translation(Vec3::new(0.0, 0.0, 20.0)),
+    ];
+    for x in xf {
+        scene.add_instance(id, x);
+    }
+    scene.build();
+    assert_eq!(scene.num_instances(), 3);
+    let mut rng = limitray::bench::SplitMix64(9);
+    let mut hits = 0;
+    for _ in 0..5000 {
+        let i = rng.below(3);
+        let target = xf[i].transform_point3(Vec3::new(
+            (rng.next_f64() - 0.5) as f32,
+            (rng.next_f64() - 0.5) as f32,
+            (rng.next_f64() - 0.5) as f32,
+        ));
+        let o = Vec3::new(0.0, 40.0, 5.0);
+        let ray = Ray::new(o.into(), (target - o).into());
+        let h = scene
+            .intersect(&ray)
+            .expect("aimed at a point inside an instance");
+        assert!(scene.occluded(&ray));
+        // The same query in the hit instance's object space.
+        let inv = xf[h.instance as usize].inverse();
+        let oray = Ray::new(
+            inv.transform_point3(o).into(),
+            inv.transform_vector3(target - o).into(),
+        );
+        let oh = mesh.intersect(&oray).unwrap();
+        assert_eq!(oh.triangle, h.hit.triangle);
+        assert!(
+            (oh.t - h.hit.t).abs() <= 1e-5 * oh.t,
+            "{} vs {}",
+            oh.t,
+            h.hit.t
+        );
+        // Normals: world normal ∝ M^-T n.
+        let m = xf[h.instance as usize].matrix3;
+        let expect = (m.inverse().transpose() * Vec3::from(oh.ng)).normalize();
+        assert!(expect.dot(Vec3::from(h.hit.ng)) > 0.9999);
+        // Nearest instance: nothing closer along the ray.
+        let mut shorter = ray;
+        shorter.tmax = h.hit.t * 0.999;
+        assert!(scene
+            .intersect(&shorter)
+            .is_none_or(|s| s.hit.t <= shorter.tmax));
+        hits += 1;
+    }
+    assert_eq!(hits, 5000);
+    // A ray between the instances misses; bounds cover all three.
+    assert!(scene
+        .intersect(&Ray::new([0.0, 40.0, 0.0], [0.0, 1.0, 0.0]))
+        .is_none());
+    let b = scene.bounds();
+    assert!(b[0][0] < -10.0 && b[1][0] > 10.0 && b[1][2] > 20.0);
+}
