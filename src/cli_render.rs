@@ -105,7 +105,23 @@ pub fn run(args: &RenderArgs) -> Result<RenderReport> {
     pool.install(|| render_in_pool(args))
 }
 
+/// Fails early (before a long render) when an output file's folder does not exist.
+fn check_output(path: &std::path::Path) -> Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::new(
+            ErrorKind::Io,
+            format!("folder {} does not exist", dir.display()),
+        )
+        .in_file(path.display().to_string())),
+        _ => Ok(()),
+    }
+}
+
 fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
+    check_output(&args.output)?;
+    for p in [&args.png, &args.levels_png].into_iter().flatten() {
+        check_output(p)?;
+    }
     let desc = read_scene(&args.scene)?;
     let mut settings = desc.render;
     if let Some(s) = args.spp {

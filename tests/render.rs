@@ -545,7 +545,10 @@ fn furnace_lossless_and_rough_interfaces() {
 fn readme_scene_example_parses() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
-    let start = readme.find("```toml\n[render]").expect("README has the example") + 8;
+    let start = readme
+        .find("```toml\n[render]")
+        .expect("README has the example")
+        + 8;
     let end = start + readme[start..].find("```").unwrap();
     let desc = parse_scene(&readme[start..end], &root.join("scenes/example.toml")).unwrap();
     assert_eq!(desc.materials.len(), 4);
