@@ -78,6 +78,11 @@ impl Camera {
 
     /// The primary ray through image point `(px, py)` (pixel units) for lens sample
     /// `(lu, lv) ∈ [0,1)²`: `(origin, unit direction)`.
+    ///
+    /// For a pinhole this uses only `+ − × ÷` and one `sqrt` (in `normalize`) on the stored
+    /// fields, in this order: `sx = (2px/W − 1)·t·(W/H)`, `sy = (1 − 2py/H)·t`,
+    /// `d = normalize(forward + right·sx + up·sy)`; a GPU kernel given the same fields computes
+    /// the same bits (the thin lens adds a `sin`/`cos` in the disk sample).
     pub fn ray(&self, px: f32, py: f32, lu: f32, lv: f32) -> (Vec3, Vec3) {
         let aspect = self.width as f32 / self.height as f32;
         let sx = (2.0 * px / self.width as f32 - 1.0) * self.tan_half_fov * aspect;
