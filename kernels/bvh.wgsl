@@ -11,10 +11,12 @@
 // i & (2^shift − 1) of chunk i >> shift.
 //
 // Words of the space (offsets in `Params`):
-//   mesh records  4 words each: node offset, node count, vertex offset, triangle count
+//   mesh records  8 words each: node offset, node count, vertex offset, triangle count,
+//                 box offset, 3 unused
 //   nodes         20 words per obvhs CwBvhNode (its 80 bytes, bytemuck)
+//   boxes         48 words per node: the exact f32 child boxes the CPU traverses (WideBoxes)
 //   vertices      9 words per leaf-ordered triangle (three corners, f32 bits)
-//   top nodes     the top-level CWBVH (scene mode)
+//   top nodes     the top-level CWBVH (scene mode), and its boxes
 //   top index     1 word per top-level leaf slot: the instance
 //   instances     16 words: mesh, 3 unused, then world-to-object x_axis, y_axis, z_axis,
 //                 translation (f32 bits, glam's Affine3A columns)
@@ -28,6 +30,7 @@ struct Params {
     top_node_count: u32,
     top_index_off: u32,
     inst_off: u32,
+    top_box_off: u32,
     // Rays in this dispatch.
     ray_count: u32,
     // Loop iterations allowed per ray (all levels together) before it reports overflow.
@@ -40,7 +43,6 @@ struct Params {
     user2: u32,
     user3: u32,
     user4: u32,
-    user5: u32,
 }
 
 @group(0) @binding(0) var<uniform> P: Params;
@@ -208,16 +210,10 @@ fn byte_of(lo: u32, hi: u32, c: u32) -> u32 {
     return (w >> ((c & 3u) * 8u)) & 0xffu;
 }
 
-// The conservative slab test of child c: exactly PreparedRay::hits_box over child_box, with
-// the max/min of the SSE version (a NaN distance keeps the bound).
-fn node_hitmask(n: u32, r: PRay, tmax: f32) -> u32 {
-    let p = vec3<f32>(gf(n), gf(n + 1u), gf(n + 2u));
-    let w3 = gw(n + 3u);
-    let e = vec3<f32>(
-        bitcast<f32>((w3 & 0xffu) << 23u),
-        bitcast<f32>(((w3 >> 8u) & 0xffu) << 23u),
-        bitcast<f32>(((w3 >> 16u) & 0xffu) << 23u),
-    );
+// The node test (wide_hitmask): PreparedRay::hits_box over the exact f32 child boxes that the
+// CPU traverses (48 words at `bx`: lo[axis][child], then hi[axis][child]), with the max/min of
+// the SSE version (a NaN distance keeps the bound). Child order and masks from the node at `n`.
+fn node_hitmask(n: u32, bx: u32, r: PRay, tmax: f32) -> u32 {
     let meta_lo = gw(n + 6u);
     let meta_hi = gw(n + 7u);
     // get_child_and_index_bits, one 32-bit half at a time (no bit crosses a byte that matters).
@@ -230,24 +226,16 @@ fn node_hitmask(n: u32, r: PRay, tmax: f32) -> u32 {
     let bidx_hi = (meta_hi ^ (oct & imask_hi)) & 0x1f1f1f1fu;
     let cbits_lo = (meta_lo >> 5u) & 0x07070707u;
     let cbits_hi = (meta_hi >> 5u) & 0x07070707u;
-    var q: array<u32, 12>;
-    for (var i = 0u; i < 12u; i++) {
-        q[i] = gw(n + 8u + i);
-    }
     var mask = 0u;
     for (var c = 0u; c < 8u; c++) {
         if (byte_of(meta_lo, meta_hi, c) == 0u) {
             continue;
         }
-        let h = select(0u, 1u, c >= 4u);
-        let sh = (c & 3u) * 8u;
         var near = r.tmin;
         var far = tmax;
         for (var a = 0u; a < 3u; a++) {
-            let qlo = f32((q[4u * a + h] >> sh) & 0xffu);
-            let qhi = f32((q[4u * a + 2u + h] >> sh) & 0xffu);
-            let lo = p[a] + e[a] * qlo;
-            let hi = p[a] + e[a] * qhi;
+            let lo = gf(bx + 8u * a + c);
+            let hi = gf(bx + 24u + 8u * a + c);
             var nn = lo;
             var ff = hi;
             if (sign_negative(r.inv[a])) {
@@ -291,10 +279,11 @@ var<private> overflow: bool;
 // With `any`, the first hit found ends the traversal (MeshBvh::occluded).
 fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
     var best = MeshHit(false, 0u, 0.0, 0.0, 0.0);
-    let rec = P.mesh_off + 4u * m;
+    let rec = P.mesh_off + 8u * m;
     let node_off = gw(rec);
     let node_count = gw(rec + 1u);
     let vert_off = gw(rec + 2u);
+    let box_off = gw(rec + 4u);
     if (node_count == 0u || !r.ok) {
         return best;
     }
@@ -341,8 +330,9 @@ fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
             }
             let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
             let rel = countOneBits(hits & ~(0xffffffffu << slot));
-            let node = node_off + 20u * (base + rel);
-            let hm = node_hitmask(node, r, tmax);
+            let ni = base + rel;
+            let node = node_off + 20u * ni;
+            let hm = node_hitmask(node, box_off + 48u * ni, r, tmax);
             let imask = (gw(node + 3u) >> 24u) & 0xffu;
             cur.x = gw(node + 4u);
             prim.x = gw(node + 5u);
@@ -444,8 +434,9 @@ fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32, anyhit: bo
             }
             let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
             let rel = countOneBits(hits & ~(0xffffffffu << slot));
-            let node = P.top_node_off + 20u * (base + rel);
-            let hm = node_hitmask(node, r, tmax);
+            let ni = base + rel;
+            let node = P.top_node_off + 20u * ni;
+            let hm = node_hitmask(node, P.top_box_off + 48u * ni, r, tmax);
             let imask = (gw(node + 3u) >> 24u) & 0xffu;
             cur.x = gw(node + 4u);
             prim.x = gw(node + 5u);

@@ -39,9 +39,9 @@ const H_INST_XF: u32 = 15u;
 const H_MESH_EXTRA: u32 = 16u;
 const H_CAMERA: u32 = 20u;
 
-// +∞ (not a constant expression: WGSL constants must be finite; user5 is 0).
+// +∞ (not a constant expression: WGSL constants must be finite; user4 is 0).
 fn inf() -> f32 {
-    return bitcast<f32>(0x7f800000u | P.user5);
+    return bitcast<f32>(0x7f800000u | P.user4);
 }
 
 fn hdr(i: u32) -> u32 {
@@ -920,7 +920,7 @@ struct SurfaceHit {
 fn surface(h: SceneResult) -> SurfaceHit {
     let ib = P.inst_off + 16u * h.inst;
     let m = gw(ib);
-    let rec = P.mesh_off + 4u * m;
+    let rec = P.mesh_off + 8u * m;
     let v = gw(rec + 2u) + 9u * h.leaf;
     let a = v3(v);
     let b = v3(v + 3u);

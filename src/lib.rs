@@ -11,6 +11,7 @@
 pub mod bench;
 pub mod bvh;
 pub mod cli_eval;
+pub mod cli_render;
 pub mod cli_trace;
 pub mod dice;
 #[cfg(feature = "embree")]
@@ -18,9 +19,11 @@ pub mod embree;
 pub mod error;
 pub mod gpu;
 pub mod info;
+pub mod io;
 pub mod mesh;
 pub mod patch;
 pub mod probe;
 pub mod refine;
+pub mod render;
 
 pub use error::{Error, ErrorKind, Result};

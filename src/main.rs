@@ -182,6 +182,8 @@ enum Command {
     /// Side-by-side benchmark: limitray, Embree on the same triangles, Embree subdivision.
     #[cfg(feature = "embree")]
     Bench(limitray::embree::cli::BenchArgs),
+    /// Path trace a scene file to EXR (beauty + AOVs), optionally with a PNG preview.
+    Render(limitray::cli_render::RenderArgs),
 }
 
 fn load(path: &Path) -> Result<ControlMesh, Error> {
@@ -316,6 +318,7 @@ fn run(cli: Cli) -> Result<(), Error> {
             println!("{v}");
             Ok(())
         }
+        Command::Render(args) => limitray::cli_render::run(&args).map(|_| ()),
         Command::BenchRefine(args) => {
             let line = limitray::bench::refine_bench(&args)?;
             println!("{line}");

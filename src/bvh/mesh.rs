@@ -29,8 +29,31 @@ pub struct MeshBvh {
     pub tri_verts: Vec<[[f32; 3]; 3]>,
     /// BVH leaf order → [`DicedMesh::triangles`] index.
     pub tri_index: Vec<u32>,
+    /// Exact `f32` bounds of every node's children, for the CPU traversal (the quantised
+    /// boxes in `cwbvh` are kept conservative too, for compact uploads such as the GPU's).
+    pub boxes: Vec<WideBoxes>,
     /// Number of child planes that had to be widened after quantisation.
     pub widened_planes: usize,
+}
+
+/// The exact bounds of a node's eight children, structure of arrays (empty slots are empty
+/// boxes, `lo = +∞`, `hi = −∞`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct WideBoxes {
+    /// Lower corners, per axis, per child.
+    pub lo: [[f32; 8]; 3],
+    /// Upper corners, per axis, per child.
+    pub hi: [[f32; 8]; 3],
+}
+
+impl Default for WideBoxes {
+    fn default() -> Self {
+        WideBoxes {
+            lo: [[f32::INFINITY; 8]; 3],
+            hi: [[f32::NEG_INFINITY; 8]; 3],
+        }
+    }
 }
 
 struct TriBox([[f32; 3]; 3]);
@@ -96,6 +119,7 @@ impl MeshBvh {
                 cwbvh: CwBvh::default(),
                 tri_verts: Vec::new(),
                 tri_index: Vec::new(),
+                boxes: Vec::new(),
                 widened_planes: 0,
             };
         }
@@ -105,12 +129,13 @@ impl MeshBvh {
         let tri_index = cwbvh.primitive_indices.clone();
         let tri_verts: Vec<[[f32; 3]; 3]> =
             tri_index.iter().map(|&i| prims[i as usize].0).collect();
-        let widened_planes = make_conservative(&mut cwbvh, &tri_verts);
+        let (widened_planes, boxes) = make_conservative(&mut cwbvh, &tri_verts);
         MeshBvh {
             diced,
             cwbvh,
             tri_verts,
             tri_index,
+            boxes,
             widened_planes,
         }
     }
@@ -118,6 +143,7 @@ impl MeshBvh {
     /// Memory of the BVH and the triangle data, in bytes (the diced mesh included).
     pub fn bytes(&self) -> usize {
         self.cwbvh.nodes.len() * std::mem::size_of::<CwBvhNode>()
+            + self.boxes.len() * std::mem::size_of::<WideBoxes>()
             + self.cwbvh.primitive_indices.len() * 4
             + self.tri_verts.len() * 36
             + self.tri_index.len() * 4
@@ -144,7 +170,13 @@ impl MeshBvh {
             self.cwbvh,
             node,
             state,
-            node_hitmask(node, r, state.oct_inv4, tmax),
+            wide_hitmask(
+                node,
+                &self.boxes[node_index(&self.cwbvh, node)],
+                r,
+                state.oct_inv4,
+                tmax
+            ),
             {
                 let (t, s) = leaf(state.primitive_id as usize, tmax);
                 tmax = t;
@@ -251,22 +283,50 @@ pub fn normalize(v: [f32; 3]) -> [f32; 3] {
     }
 }
 
-/// The obvhs hit mask of `node`'s children met by `r` (conservatively) within `tmax`.
+/// The obvhs hit mask of `node`'s children whose exact boxes `b` the ray `r` meets
+/// (conservatively) within `tmax`.
 #[inline(always)]
-pub(crate) fn node_hitmask(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
+pub fn wide_hitmask(
+    node: &CwBvhNode,
+    b: &WideBoxes,
+    r: &PreparedRay,
+    oct_inv4: u32,
+    tmax: f32,
+) -> u32 {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: SSE2 is part of the x86_64 baseline.
-        unsafe { node_hitmask_sse(node, r, oct_inv4, tmax) }
+        unsafe { wide_hitmask_sse(node, b, r, oct_inv4, tmax) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        node_hitmask_scalar(node, r, oct_inv4, tmax)
+        wide_hitmask_scalar(node, b, r, oct_inv4, tmax)
     }
 }
 
-/// Scalar reference of the node test: the same operations in the same order as the SIMD
-/// version (and as the WGSL port).
+/// Scalar reference of [`wide_hitmask`].
+#[inline(always)]
+pub fn wide_hitmask_scalar(
+    node: &CwBvhNode,
+    b: &WideBoxes,
+    r: &PreparedRay,
+    oct_inv4: u32,
+    tmax: f32,
+) -> u32 {
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut mask = 0u32;
+    for c in 0..8 {
+        let lo = [b.lo[0][c], b.lo[1][c], b.lo[2][c]];
+        let hi = [b.hi[0][c], b.hi[1][c], b.hi[2][c]];
+        if node.child_meta[c] != 0 && r.hits_box(lo, hi, tmax) {
+            mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
+        }
+    }
+    mask
+}
+
+/// The node test on the quantised boxes of `node` as the traversal of a compact upload
+/// decodes them (`p + 2^e · q`); the reference for ports that keep only the 80-byte nodes.
 #[inline(always)]
 pub fn node_hitmask_scalar(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
@@ -287,32 +347,23 @@ pub fn node_hitmask_scalar(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tma
 /// bound when the slab distance is NaN, as `f32::max` does).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn node_hitmask_sse(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
+unsafe fn wide_hitmask_sse(
+    node: &CwBvhNode,
+    b: &WideBoxes,
+    r: &PreparedRay,
+    oct_inv4: u32,
+    tmax: f32,
+) -> u32 {
     use std::arch::x86_64::*;
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let e = node.compute_extent();
-    let p = node.p;
     let scale = _mm_set1_ps(1.0 + 2.0 * super::triangle::GAMMA3);
     let mut mask = 0u32;
     for h in 0..2 {
-        let q = |a: &[u8; 8]| {
-            _mm_set_ps(
-                a[h * 4 + 3] as f32,
-                a[h * 4 + 2] as f32,
-                a[h * 4 + 1] as f32,
-                a[h * 4] as f32,
-            )
-        };
         let mut near = _mm_set1_ps(r.tmin);
         let mut far = _mm_set1_ps(tmax);
-        let axes: [(f32, f32, &[u8; 8], &[u8; 8]); 3] = [
-            (p.x, e.x, &node.child_min_x, &node.child_max_x),
-            (p.y, e.y, &node.child_min_y, &node.child_max_y),
-            (p.z, e.z, &node.child_min_z, &node.child_max_z),
-        ];
-        for (a, (pa, ea, qlo, qhi)) in axes.into_iter().enumerate() {
-            let lo = _mm_add_ps(_mm_set1_ps(pa), _mm_mul_ps(_mm_set1_ps(ea), q(qlo)));
-            let hi = _mm_add_ps(_mm_set1_ps(pa), _mm_mul_ps(_mm_set1_ps(ea), q(qhi)));
+        for a in 0..3 {
+            let lo = _mm_loadu_ps(b.lo[a].as_ptr().add(h * 4));
+            let hi = _mm_loadu_ps(b.hi[a].as_ptr().add(h * 4));
             let (n, f) = if r.inv[a].is_sign_negative() {
                 (hi, lo)
             } else {
@@ -325,22 +376,26 @@ unsafe fn node_hitmask_sse(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tma
             near = _mm_max_ps(tn, near);
             far = _mm_min_ps(tf, far);
         }
-        let hit = _mm_movemask_ps(_mm_cmple_ps(near, far)) as u32;
-        for j in 0..4 {
-            if hit & (1 << j) != 0 {
-                let c = h * 4 + j;
-                mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
-            }
+        let mut hit = _mm_movemask_ps(_mm_cmple_ps(near, far)) as u32;
+        while hit != 0 {
+            let j = hit.trailing_zeros() as usize;
+            hit &= hit - 1;
+            let c = h * 4 + j;
+            mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
         }
     }
     mask
 }
 
 /// Widens quantised child boxes until, as decoded, they contain everything below them.
-/// Returns the number of planes moved.
-pub(crate) fn make_conservative(bvh: &mut CwBvh, tri_verts: &[[[f32; 3]; 3]]) -> usize {
+/// Returns the number of planes moved and the exact bounds of every node's children.
+pub(crate) fn make_conservative(
+    bvh: &mut CwBvh,
+    tri_verts: &[[[f32; 3]; 3]],
+) -> (usize, Vec<WideBoxes>) {
     let n = bvh.nodes.len();
     let mut content = vec![EMPTY; n];
+    let mut boxes = vec![WideBoxes::default(); n];
     let mut widened = 0;
     for i in (0..n).rev() {
         let mut node = bvh.nodes[i];
@@ -398,8 +453,21 @@ pub(crate) fn make_conservative(bvh: &mut CwBvh, tri_verts: &[[[f32; 3]; 3]]) ->
         }
         bvh.nodes[i] = node;
         content[i] = wants.iter().fold(EMPTY, |a, &b| union(a, b));
+        for c in 0..8 {
+            for a in 0..3 {
+                boxes[i].lo[a][c] = wants[c].0[a];
+                boxes[i].hi[a][c] = wants[c].1[a];
+            }
+        }
     }
-    widened
+    (widened, boxes)
+}
+
+/// Index of `node` in `bvh.nodes` (the traversal macro hands out references).
+#[inline(always)]
+pub fn node_index(bvh: &CwBvh, node: &CwBvhNode) -> usize {
+    // SAFETY: `node` points into `bvh.nodes` (the traversal only indexes that slice).
+    unsafe { (node as *const CwBvhNode).offset_from(bvh.nodes.as_ptr()) as usize }
 }
 
 /// Moves the planes of child `c` outwards until its decoded box contains `want`; `None` if a
@@ -445,28 +513,22 @@ mod tests {
     use super::*;
     use crate::bvh::Ray;
 
-    /// The SSE node test equals the scalar one bit for bit on random nodes and rays,
-    /// axis-parallel rays and rays in box planes included.
+    /// The SSE node test equals the scalar one bit for bit on random boxes and rays,
+    /// axis-parallel rays included; both contain every hit of the quantised test.
     #[test]
     fn sse_node_test_matches_scalar() {
         let mut rng = crate::bench::SplitMix64(5);
         let mut f = |s: f64| ((rng.next_f64() - 0.5) * s) as f32;
         for i in 0..20000 {
-            let mut node = CwBvhNode {
-                p: glam::Vec3::new(f(4.0), f(4.0), f(4.0)),
-                e: [120 + (i % 10) as u8, 121, 119],
-                ..Default::default()
-            };
+            let mut node = CwBvhNode::default();
+            let mut b = WideBoxes::default();
             for c in 0..8 {
-                let a = (f(255.0) + 127.5) as u8;
-                let b = (f(255.0) + 127.5) as u8;
-                node.child_min_x[c] = a.min(b);
-                node.child_max_x[c] = a.max(b);
-                node.child_min_y[c] = a.min(b) / 2;
-                node.child_max_y[c] = a.max(b);
-                node.child_min_z[c] = a / 3;
-                node.child_max_z[c] = a.max(b);
                 node.child_meta[c] = if c % 3 == 0 { 0b0010_0000 | c as u8 } else { 0 };
+                for a in 0..3 {
+                    let (x, y) = (f(4.0), f(4.0));
+                    b.lo[a][c] = x.min(y);
+                    b.hi[a][c] = x.max(y);
+                }
             }
             let mut d = [f(2.0), f(2.0), f(2.0)];
             if i % 4 == 0 {
@@ -475,12 +537,15 @@ mod tests {
             if d == [0.0; 3] {
                 d[0] = 1.0;
             }
-            let ray = Ray::new([f(8.0), f(8.0), f(8.0)], d);
-            let r = PreparedRay::new(&ray).unwrap();
+            let mut o = [f(8.0), f(8.0), f(8.0)];
+            if i % 5 == 0 {
+                o[i % 3] = b.lo[i % 3][0];
+            }
+            let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
             for tmax in [f32::INFINITY, 1.0] {
                 assert_eq!(
-                    node_hitmask(&node, &r, 0x0707_0707, tmax),
-                    node_hitmask_scalar(&node, &r, 0x0707_0707, tmax)
+                    wide_hitmask(&node, &b, &r, 0x0707_0707, tmax),
+                    wide_hitmask_scalar(&node, &b, &r, 0x0707_0707, tmax)
                 );
             }
         }

@@ -41,6 +41,8 @@ pub struct SceneBvh {
     pub(crate) top: CwBvh,
     /// Instance of each top-level leaf slot.
     pub(crate) top_index: Vec<u32>,
+    /// Exact child bounds of the top-level nodes.
+    pub(crate) top_boxes: Vec<super::mesh::WideBoxes>,
 }
 
 struct InstBox(([f32; 3], [f32; 3]));
@@ -148,7 +150,7 @@ impl SceneBvh {
                 [b.0, b.1, b.1]
             })
             .collect();
-        super::mesh::make_conservative(&mut top, &corners);
+        self.top_boxes = super::mesh::make_conservative(&mut top, &corners).1;
         self.top = top;
     }
 
@@ -193,7 +195,13 @@ impl SceneBvh {
             self.top,
             node,
             state,
-            super::mesh::node_hitmask(node, &r, state.oct_inv4, tmax),
+            super::mesh::wide_hitmask(
+                node,
+                &self.top_boxes[super::mesh::node_index(&self.top, node)],
+                &r,
+                state.oct_inv4,
+                tmax
+            ),
             {
                 let inst = self.top_index[state.primitive_id as usize];
                 let (t, stop) = leaf(inst, tmax);

@@ -1,8 +1,9 @@
-//! The scene on the device: one space of `u32` words (mesh records, CWBVH nodes, leaf-ordered
-//! triangle corners, the top level, instances) split into up to [`GEO_CHUNKS`] storage
+//! The scene on the device: one space of `u32` words (mesh records, CWBVH nodes with the exact
+//! child boxes the CPU traverses, leaf-ordered triangle corners, the top level, instances) split into up to [`GEO_CHUNKS`] storage
 //! bindings, so that a scene larger than one binding (128 MiB on lavapipe) still works.
 //! Word `i` is word `i & (2^shift − 1)` of chunk `i >> shift`; see `kernels/bvh.wgsl`.
 
+use crate::bvh::mesh::WideBoxes;
 use crate::bvh::{MeshBvh, SceneBvh};
 use crate::error::{Error, ErrorKind, Result};
 use obvhs::cwbvh::node::CwBvhNode;
@@ -26,8 +27,8 @@ pub struct PackedScene {
     pub words: Vec<u32>,
     /// 0: one mesh (record 0, world space); 1: instances under a top level.
     pub mode: u32,
-    /// Word offset of the mesh records (4 words: node offset, node count, vertex offset,
-    /// triangle count).
+    /// Word offset of the mesh records ([`MESH_WORDS`] words: node offset, node count, vertex
+    /// offset, triangle count, box offset).
     pub mesh_off: u32,
     /// Word offset of the top-level nodes.
     pub top_node_off: u32,
@@ -37,6 +38,8 @@ pub struct PackedScene {
     pub top_index_off: u32,
     /// Word offset of the instance records.
     pub inst_off: u32,
+    /// Word offset of the top-level nodes' exact child boxes.
+    pub top_box_off: u32,
 }
 
 fn offset(words: &[u32]) -> Result<u32> {
@@ -48,9 +51,32 @@ fn offset(words: &[u32]) -> Result<u32> {
     })
 }
 
+/// Words per node of exact child boxes (`WideBoxes`).
+pub const BOX_WORDS: usize = 48;
+/// Words per mesh record.
+pub const MESH_WORDS: usize = 8;
+
+fn push_boxes(words: &mut Vec<u32>, boxes: &[WideBoxes]) {
+    for b in boxes {
+        for side in [&b.lo, &b.hi] {
+            for axis in side {
+                words.extend(axis.iter().map(|x| x.to_bits()));
+            }
+        }
+    }
+}
+
 fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &MeshBvh) -> Result<()> {
+    if m.boxes.len() != m.cwbvh.nodes.len() {
+        return Err(Error::new(
+            ErrorKind::Gpu,
+            "mesh BVH has no exact child boxes for every node",
+        ));
+    }
     let node_off = offset(words)?;
     words.extend_from_slice(bytemuck::cast_slice(&m.cwbvh.nodes));
+    let box_off = offset(words)?;
+    push_boxes(words, &m.boxes);
     let vert_off = offset(words)?;
     for t in &m.tri_verts {
         for v in t {
@@ -62,13 +88,14 @@ fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &MeshBvh) -> Result<()> {
     words[rec + 1] = m.cwbvh.nodes.len() as u32;
     words[rec + 2] = vert_off;
     words[rec + 3] = m.tri_verts.len() as u32;
+    words[rec + 4] = box_off;
     Ok(())
 }
 
 impl PackedScene {
     /// One mesh, traced in its own space (as [`MeshBvh::intersect`]).
     pub fn from_mesh(m: &MeshBvh) -> Result<PackedScene> {
-        let mut words = vec![0u32; 4];
+        let mut words = vec![0u32; MESH_WORDS];
         push_mesh(&mut words, 0, m)?;
         Ok(PackedScene {
             words,
@@ -79,12 +106,20 @@ impl PackedScene {
 
     /// Instances of meshes (as [`SceneBvh::intersect`]).
     pub fn from_scene(s: &SceneBvh) -> Result<PackedScene> {
-        let mut words = vec![0u32; 4 * s.meshes.len().max(1)];
+        let mut words = vec![0u32; MESH_WORDS * s.meshes.len().max(1)];
         for (i, m) in s.meshes.iter().enumerate() {
-            push_mesh(&mut words, 4 * i, m)?;
+            push_mesh(&mut words, MESH_WORDS * i, m)?;
+        }
+        if s.top_boxes.len() != s.top.nodes.len() {
+            return Err(Error::new(
+                ErrorKind::Gpu,
+                "scene top level has no exact child boxes for every node",
+            ));
         }
         let top_node_off = offset(&words)?;
         words.extend_from_slice(bytemuck::cast_slice(&s.top.nodes));
+        let top_box_off = offset(&words)?;
+        push_boxes(&mut words, &s.top_boxes);
         let top_index_off = offset(&words)?;
         words.extend_from_slice(&s.top_index);
         let inst_off = offset(&words)?;
@@ -109,6 +144,7 @@ impl PackedScene {
             top_node_count: s.top.nodes.len() as u32,
             top_index_off,
             inst_off,
+            top_box_off,
         })
     }
 

@@ -37,6 +37,8 @@ pub struct Params {
     pub top_index_off: u32,
     /// See [`PackedScene::inst_off`].
     pub inst_off: u32,
+    /// See [`PackedScene::top_box_off`].
+    pub top_box_off: u32,
     /// Rays (or work items) in this dispatch.
     pub ray_count: u32,
     /// Traversal loop iterations allowed per ray.
@@ -53,8 +55,6 @@ pub struct Params {
     pub user3: u32,
     /// Kernel-specific.
     pub user4: u32,
-    /// Kernel-specific.
-    pub user5: u32,
 }
 
 impl Params {
@@ -68,6 +68,7 @@ impl Params {
             top_node_count: packed.top_node_count,
             top_index_off: packed.top_index_off,
             inst_off: packed.inst_off,
+            top_box_off: packed.top_box_off,
             ray_count: 0,
             max_iter,
             box_scale: 1.0 + 2.0 * crate::bvh::triangle::GAMMA3,
@@ -76,7 +77,6 @@ impl Params {
             user2: 0,
             user3: 0,
             user4: 0,
-            user5: 0,
         }
     }
 }

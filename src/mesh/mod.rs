@@ -4,6 +4,7 @@
 mod builder;
 pub mod generate;
 pub mod obj;
+pub mod shapes;
 pub mod topology;
 
 pub use builder::MeshBuilder;
