@@ -44,6 +44,16 @@ fn inf() -> f32 {
     return bitcast<f32>(0x7f800000u | P.user4);
 }
 
+// x, bit for bit, through an integer operation the compiler cannot see through (user4 is 0):
+// keeps a product from being fused into a following addition (WGSL has no `precise`).
+fn nf(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ P.user4);
+}
+
+fn nf3(v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(nf(v.x), nf(v.y), nf(v.z));
+}
+
 fn hdr(i: u32) -> u32 {
     return gw(P.user1 + i);
 }
@@ -1147,9 +1157,12 @@ fn camera_ray(px: f32, py: f32, lu: f32, lv: f32) -> CamRay {
     if (aperture <= 0.0) {
         return CamRay(position, d);
     }
-    let focus = position + d * (focus_distance / dot3(d, forward));
+    let k = focus_distance / dot3(d, forward);
+    // nf3: NIR may otherwise simplify (position + x) − position to x (inexact float
+    // algebra is allowed on SPIR-V without NoContraction); Rust rounds the sum first.
+    let focus = nf3(position + d * k);
     let disk = concentric_disk(lu, lv);
-    let origin = (position + right * (disk.x * aperture)) + up * (disk.y * aperture);
+    let origin = nf3((position + right * (disk.x * aperture)) + up * (disk.y * aperture));
     return CamRay(origin, normalize3(focus - origin));
 }
 

@@ -11,7 +11,7 @@ use std::time::Instant;
 pub enum Backend {
     /// The CPU path tracer (rayon).
     Cpu,
-    /// The wgpu compute backend (not available yet).
+    /// The wgpu compute backend on a Vulkan adapter (`limitray::gpu`).
     Gpu,
 }
 
@@ -48,6 +48,10 @@ pub struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
+    /// GPU adapter for `--backend gpu`: a case-insensitive substring of its name (default:
+    /// $LIMITRAY_ADAPTER, else a real GPU before a CPU implementation).
+    #[arg(long)]
+    pub adapter: Option<String>,
     /// No progress bar and no summary on stderr.
     #[arg(long)]
     pub quiet: bool,
@@ -86,12 +90,6 @@ pub struct RenderReport {
 
 /// Runs `limitray render`.
 pub fn run(args: &RenderArgs) -> Result<RenderReport> {
-    if args.backend == Backend::Gpu {
-        return Err(Error::new(
-            ErrorKind::Usage,
-            "--backend gpu is not available yet (the wgpu backend is issue 7); use --backend cpu",
-        ));
-    }
     if args.spp == Some(0) {
         return Err(Error::new(ErrorKind::Usage, "--spp must be at least 1"));
     }
@@ -166,12 +164,23 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
         b
     };
     let t0 = Instant::now();
-    let film = world.render(&|n| {
-        if bar.length().is_none() {
-            bar.set_length(n as u64);
+    let film = match args.backend {
+        Backend::Cpu => world.render(&|n| {
+            if bar.length().is_none() {
+                bar.set_length(n as u64);
+            }
+            bar.inc(1);
+        }),
+        Backend::Gpu => {
+            let ctx = crate::gpu::GpuContext::new(args.adapter.as_deref())?;
+            if !args.quiet {
+                eprintln!("GPU: {}", ctx.describe());
+            }
+            let gpu = crate::gpu::render::GpuRenderer::new(&ctx, &world, None)?;
+            bar.set_length(1000);
+            gpu.render(&world, &|x| bar.set_position((x * 1000.0) as u64))?
         }
-        bar.inc(1);
-    });
+    };
     let render_s = t0.elapsed().as_secs_f64();
     bar.finish_and_clear();
     crate::io::exr::write_film(&args.output, &film)?;

@@ -465,7 +465,7 @@ fn cli_reports_scene_errors_with_key_and_line() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no_such_mesh.obj"));
-    // The GPU backend is not there yet: a clear usage error.
+    // The GPU backend reads the scene the same way: the same located error.
     let out = limitray()
         .arg("render")
         .arg(dir.path("bad2.toml"))
@@ -475,7 +475,7 @@ fn cli_reports_scene_errors_with_key_and_line() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("issue 7"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no_such_mesh.obj"));
 }
 
 /// The committed OBJ files of the bundled scenes are what the generators in

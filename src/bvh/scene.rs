@@ -29,7 +29,7 @@ pub struct SceneHit {
 pub(crate) struct Instance {
     pub(crate) mesh: u32,
     pub(crate) world_to_object: Affine3A,
-    normal_matrix: Mat3A,
+    pub(crate) normal_matrix: Mat3A,
     bounds: ([f32; 3], [f32; 3]),
 }
 
