@@ -163,22 +163,37 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
         );
         b
     };
+    // GPU set-up (device, upload, kernel compilation) is not part of the render time.
+    let gpu_ctx = match args.backend {
+        Backend::Cpu => None,
+        Backend::Gpu => Some(crate::gpu::GpuContext::new(args.adapter.as_deref())?),
+    };
+    let gpu = match &gpu_ctx {
+        None => None,
+        Some(ctx) => {
+            let t = Instant::now();
+            let g = crate::gpu::render::GpuRenderer::new(ctx, &world, None)?;
+            if !args.quiet {
+                eprintln!(
+                    "GPU: {}; upload and kernels {:.2} s",
+                    ctx.describe(),
+                    t.elapsed().as_secs_f64()
+                );
+            }
+            Some(g)
+        }
+    };
     let t0 = Instant::now();
-    let film = match args.backend {
-        Backend::Cpu => world.render(&|n| {
+    let film = match &gpu {
+        None => world.render(&|n| {
             if bar.length().is_none() {
                 bar.set_length(n as u64);
             }
             bar.inc(1);
         }),
-        Backend::Gpu => {
-            let ctx = crate::gpu::GpuContext::new(args.adapter.as_deref())?;
-            if !args.quiet {
-                eprintln!("GPU: {}", ctx.describe());
-            }
-            let gpu = crate::gpu::render::GpuRenderer::new(&ctx, &world, None)?;
+        Some(g) => {
             bar.set_length(1000);
-            gpu.render(&world, &|x| bar.set_position((x * 1000.0) as u64))?
+            g.render(&world, &|x| bar.set_position((x * 1000.0) as u64))?
         }
     };
     let render_s = t0.elapsed().as_secs_f64();
