@@ -29,7 +29,10 @@ for config in $CONFIGS; do
         python3 -c '
 import json, sys
 j = json.loads(sys.argv[3])
-print(f"| {sys.argv[1]} | {sys.argv[2]} | {j[\"threads\"]} | {j[\"triangles\"]:,} | {j[\"table_ms\"]:.0f} | {j[\"dice_ms\"]:.0f} | {j[\"bvh_ms\"]:.0f} | {j[\"bytes_per_triangle\"]:.0f} | {j[\"coherent_mrays_per_s\"]:.2f} | {j[\"incoherent_mrays_per_s\"]:.2f} |")
+cols = [sys.argv[1], sys.argv[2], j["threads"], format(j["triangles"], ","), round(j["table_ms"]),
+        round(j["dice_ms"]), round(j["bvh_ms"]), round(j["bytes_per_triangle"]),
+        "%.2f" % j["coherent_mrays_per_s"], "%.2f" % j["incoherent_mrays_per_s"]]
+print("| " + " | ".join(str(c) for c in cols) + " |")
 ' "$name" "$rate" "$json"
     done
 done

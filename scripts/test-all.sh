@@ -15,3 +15,10 @@ if [ -f scripts/setup-lavapipe.sh ]; then
 fi
 export NODEVICE_SELECT=1
 cargo test --features embree "$@"
+
+# The EXR through an independent reader: the reference OpenEXR library's Python module.
+python3 -m pip install --quiet --disable-pip-version-check OpenEXR
+# `cargo test` built the binary (test profile, optimised) for the CLI tests.
+target/debug/limitray render scenes/default.toml -o target/check-default.exr \
+    --res 64x36 --spp 2 --quiet
+python3 scripts/check-exr.py target/check-default.exr

@@ -11,6 +11,7 @@
 use super::ray::{Hit, Ray};
 use super::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::DicedMesh;
+// `UVec2` is named inside obvhs's `traverse!` macro.
 use glam::{UVec2, Vec3A};
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::node::{extract_byte64, CwBvhNode};
@@ -165,7 +166,6 @@ impl MeshBvh {
         let mut tmax = r.tmax;
         let mut state = self.cwbvh.new_traversal(Vec3A::from(r.d));
         let mut node: &CwBvhNode;
-        let mut stop = false;
         obvhs::traverse!(
             self.cwbvh,
             node,
@@ -181,12 +181,10 @@ impl MeshBvh {
                 let (t, s) = leaf(state.primitive_id as usize, tmax);
                 tmax = t;
                 if s {
-                    stop = true;
                     break;
                 }
             }
         );
-        let _ = stop;
     }
 
     /// Closest hit of `ray` in `[tmin, tmax]`.
@@ -503,10 +501,6 @@ fn widen(node: &mut CwBvhNode, c: usize, want: Bounds) -> Option<usize> {
         moved += 1;
     }
 }
-
-// `UVec2` is named by obvhs's traversal macro.
-#[allow(dead_code)]
-type TraversalGroup = UVec2;
 
 #[cfg(test)]
 mod tests {

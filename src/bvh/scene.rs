@@ -9,6 +9,7 @@
 use super::mesh::{normalize, MeshBvh};
 use super::ray::{Hit, Ray};
 use super::triangle::PreparedRay;
+// `UVec2` is named inside obvhs's `traverse!` macro.
 use glam::{Affine3A, Mat3A, UVec2, Vec3A};
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
@@ -266,7 +267,3 @@ impl SceneBvh {
         normalize(inst.normal_matrix.mul_vec3a(Vec3A::from(n)).into())
     }
 }
-
-// `UVec2` is named by obvhs's traversal macro.
-#[allow(dead_code)]
-type TraversalGroup = UVec2;
