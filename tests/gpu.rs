@@ -428,3 +428,29 @@ fn path_kernels_compile() {
         }
     }
 }
+
+#[test]
+fn cli_gpu_info_and_adapter_errors() {
+    let Some(_ctx) = ctx() else { return };
+    let bin = env!("CARGO_BIN_EXE_limitray");
+    let out = std::process::Command::new(bin)
+        .arg("gpu-info")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("* "), "{text}");
+    let mesh = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/creased_cube.obj");
+    let out = std::process::Command::new(bin)
+        .args(["trace", mesh.to_str().unwrap(), "--backend", "gpu"])
+        .env("LIMITRAY_ADAPTER", "no-such-adapter-xyz")
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("no Vulkan adapter matches 'no-such-adapter-xyz'"),
+        "{err}"
+    );
+}
