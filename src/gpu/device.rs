@@ -55,10 +55,14 @@ pub fn describe(info: &wgpu::AdapterInfo) -> String {
 }
 
 fn instance() -> wgpu::Instance {
-    // Mesa's device-select layer prints XDG_RUNTIME_DIR warnings on headless machines.
-    if std::env::var_os("NODEVICE_SELECT").is_none() {
-        std::env::set_var("NODEVICE_SELECT", "1");
-    }
+    // Mesa's device-select layer prints XDG_RUNTIME_DIR warnings on headless machines. Set
+    // once, before the first instance (scripts export it themselves, so this rarely runs).
+    static QUIET: std::sync::Once = std::sync::Once::new();
+    QUIET.call_once(|| {
+        if std::env::var_os("NODEVICE_SELECT").is_none() {
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
+    });
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::VULKAN;
     wgpu::Instance::new(desc)

@@ -6,6 +6,11 @@
 //! no fused multiply-add), closest hits are bitwise the CPU's: the same triangle and the same
 //! `t`. The CPU's `f64` re-evaluation of zero edge functions is emulated exactly with integer
 //! arithmetic (`kernels/exact.wgsl`).
+//!
+//! Modules: [`device`] (adapter choice, device, error scopes), [`geometry`] (the scene as
+//! words over several storage bindings), [`trace`] (closest hits, `trace --backend gpu`),
+//! [`render`] (the path tracer, `render --backend gpu`), [`exact`] (the exact edge function,
+//! for tests), [`cli`] (command-line pieces).
 
 pub mod cli;
 pub mod device;
