@@ -80,6 +80,18 @@ fn gf(i: u32) -> f32 {
     return bitcast<f32>(gw(i));
 }
 
+// x, bit for bit, through an integer operation the compiler cannot see through (P.user4 is
+// always 0): keeps a product from being fused into the following addition, and a sum from
+// being simplified algebraically (WGSL has no `precise`, and naga's SPIR-V carries no
+// NoContraction, so drivers may fuse and simplify; Rust rounds every operation).
+fn nf(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ P.user4);
+}
+
+fn nf3(v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(nf(v.x), nf(v.y), nf(v.z));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Prepared rays (PreparedRay::new).
 
@@ -162,9 +174,11 @@ fn intersect_triangle(r: PRay, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, tmax: f
     let by = bt[ky] - r.s.y * bt[kz];
     let cx = ct[kx] - r.s.x * ct[kz];
     let cy = ct[ky] - r.s.y * ct[kz];
-    var u = cx * by - cy * bx;
-    var v = ax * cy - ay * cx;
-    var w = bx * ay - by * ax;
+    // Unfused products: a shared edge's edge functions must stay exact negatives of each other
+    // (watertightness) on devices that would fuse them into an FMA.
+    var u = nf(cx * by) - nf(cy * bx);
+    var v = nf(ax * cy) - nf(ay * cx);
+    var w = nf(bx * ay) - nf(by * ax);
     if (u == 0.0 || v == 0.0 || w == 0.0) {
         u = edge_exact(cx, by, cy, bx);
         v = edge_exact(ax, cy, ay, cx);

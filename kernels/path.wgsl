@@ -44,16 +44,6 @@ fn inf() -> f32 {
     return bitcast<f32>(0x7f800000u | P.user4);
 }
 
-// x, bit for bit, through an integer operation the compiler cannot see through (user4 is 0):
-// keeps a product from being fused into a following addition (WGSL has no `precise`).
-fn nf(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ P.user4);
-}
-
-fn nf3(v: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(nf(v.x), nf(v.y), nf(v.z));
-}
-
 fn hdr(i: u32) -> u32 {
     return gw(P.user1 + i);
 }

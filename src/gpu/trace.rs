@@ -53,7 +53,7 @@ pub struct Params {
     pub user2: u32,
     /// Kernel-specific.
     pub user3: u32,
-    /// Kernel-specific.
+    /// Must be 0: the kernels' opaque zero (`nf` in `kernels/bvh.wgsl`).
     pub user4: u32,
 }
 
