@@ -454,3 +454,43 @@ fn cli_gpu_info_and_adapter_errors() {
         "{err}"
     );
 }
+
+/// Zero leaks on the GPU: rays from inside closed diced surfaces (random directions, and aimed
+/// exactly at diced vertices and edge midpoints) all hit, at the origin and far from it.
+#[test]
+fn gpu_does_not_leak() {
+    let Some(ctx) = ctx() else { return };
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let creased = limitray::mesh::obj::read_obj(&root.join("scenes/creased_cube.obj")).unwrap();
+    for (name, mut mesh) in [
+        ("creased_cube", creased),
+        ("cube", common::cube_builder().build().unwrap()),
+    ] {
+        for far in [false, true] {
+            if far {
+                for p in &mut mesh.positions {
+                    p[0] += 148376.0;
+                    p[1] += 1234.0;
+                    p[2] -= 223423.0;
+                }
+            }
+            let bvh = build(&mesh, 8);
+            let mut rays = Vec::new();
+            for o in limitray::probe::inside_origins(&bvh.diced, 4, 0.3, 1) {
+                for d in limitray::probe::sphere_dirs(3000, 2) {
+                    rays.push(Ray::new(o, d));
+                }
+                rays.extend(limitray::probe::aimed_rays(&bvh.diced, o, 2000));
+            }
+            assert!(rays.len() > 5000);
+            let hits = trace_mesh(&ctx, &bvh, &rays, TraceOptions::default()).unwrap();
+            let missed = hits.iter().filter(|h| h.is_none()).count();
+            assert_eq!(
+                missed,
+                0,
+                "{name} (far: {far}): {missed} of {} rays leaked",
+                rays.len()
+            );
+        }
+    }
+}
