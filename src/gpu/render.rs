@@ -6,7 +6,11 @@ use super::trace::{layout, BVH_WGSL};
 use super::GpuContext;
 use crate::error::Result;
 
-const PATH_WGSL: &str = include_str!("../../kernels/path.wgsl");
+const PATH_WGSL: [&str; 3] = [
+    include_str!("../../kernels/sampling.wgsl"),
+    include_str!("../../kernels/material.wgsl"),
+    include_str!("../../kernels/path.wgsl"),
+];
 
 /// The path-tracing kernels.
 pub struct PathKernels {
@@ -22,7 +26,9 @@ impl PathKernels {
     /// Compiles the kernels for geometry in `geo_used` chunks.
     pub fn new(ctx: &GpuContext, geo_used: usize) -> Result<PathKernels> {
         let layout = layout(ctx, &[false, false]);
-        let src = format!("{}\n{}\n{}", BVH_WGSL[0], BVH_WGSL[1], PATH_WGSL);
+        let src = [BVH_WGSL.as_slice(), PATH_WGSL.as_slice()]
+            .concat()
+            .join("\n");
         let c = [("GEO_USED", geo_used as f64)];
         let path = ctx.compute_pipeline("path", &src, "path_main", &layout, &c)?;
         let primary = ctx.compute_pipeline("primary", &src, "primary_main", &layout, &c)?;
