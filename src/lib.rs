@@ -25,5 +25,6 @@ pub mod patch;
 pub mod probe;
 pub mod refine;
 pub mod render;
+pub mod vec3;
 
 pub use error::{Error, ErrorKind, Result};

@@ -7,6 +7,7 @@ use crate::bvh::exact::refine_hit;
 use crate::bvh::{MeshBvh, Ray};
 use crate::dice::DicedMesh;
 use crate::patch::PatchTable;
+use crate::vec3::{cross, dot, norm, sub};
 use rayon::prelude::*;
 
 /// Generalised winding number of the closed triangle mesh `d` around `p`, in `f64`
@@ -22,7 +23,7 @@ pub fn winding_number(d: &DicedMesh, p: [f64; 3]) -> f64 {
                 let q = d.positions[i as usize];
                 [q[0] as f64 - p[0], q[1] as f64 - p[1], q[2] as f64 - p[2]]
             });
-            let (la, lb, lc) = (len(a), len(b), len(c));
+            let (la, lb, lc) = (norm(a), norm(b), norm(c));
             let num = dot(a, cross(b, c));
             if num == 0.0 {
                 // p in the triangle's plane (or a degenerate triangle): no solid angle;
@@ -57,7 +58,7 @@ pub fn inside_origins(d: &DicedMesh, n: usize, depth: f64, seed: u64) -> Vec<[f3
         let [a, b, c] = t.map(|i| d.positions[i as usize].map(|x| x as f64));
         let centroid: [f64; 3] = std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0);
         let ng = cross(sub(b, a), sub(c, a));
-        let l = len(ng);
+        let l = norm(ng);
         if l == 0.0 {
             continue;
         }
@@ -191,7 +192,7 @@ pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f6
                 continue;
             };
             let lin: [f64; 3] = std::array::from_fn(|k| l0 * a[k] + l1 * b[k] + l2 * c[k]);
-            worst = worst.max(len(sub(s.p, lin)));
+            worst = worst.max(norm(sub(s.p, lin)));
         }
     }
     worst * 1.1
@@ -216,7 +217,7 @@ pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u6
             let target: [f64; 3] =
                 std::array::from_fn(|k| a[k] + w1 * (b[k] - a[k]) + w2 * (c[k] - a[k]));
             let ng = cross(sub(b, a), sub(c, a));
-            let l = len(ng).max(f64::MIN_POSITIVE);
+            let l = norm(ng).max(f64::MIN_POSITIVE);
             // Origin in the hemisphere above the triangle, 30° to 90° elevation.
             let z = 0.5 + 0.5 * rng.next_f64();
             let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
@@ -242,10 +243,10 @@ pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u6
             let s = table
                 .eval(h.face as usize, h.k as usize, h.u as f64, h.v as f64)
                 .ok()?;
-            let param_err = len(sub(hp, s.p));
+            let param_err = norm(sub(hp, s.p));
             match refine_hit(table, ray, &h) {
                 Some(x) => {
-                    let along = (x.t - h.t as f64).abs() * len(dir);
+                    let along = (x.t - h.t as f64).abs() * norm(dir);
                     let bound = triangle_error_bound(table, d, h.triangle as usize);
                     // Rounding: f32 vertices, f32 t along a ray from an f32 origin.
                     let mag = hp.iter().chain(&o).fold(0.0f64, |m, v| m.max(v.abs()));
@@ -284,27 +285,7 @@ fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
         [1.0, 0.0, 0.0]
     };
     let u = cross(n, a);
-    let l = len(u);
+    let l = norm(u);
     let u = u.map(|x| x / l);
     (u, cross(n, u))
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn len(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }

@@ -39,17 +39,6 @@ fn open_edges(d: &DicedMesh) -> usize {
     count.values().filter(|&&c| c != 0).count()
 }
 
-/// True if the control mesh is closed and manifold (every edge has two faces).
-fn closed(mesh: &ControlMesh) -> bool {
-    let topo =
-        limitray::mesh::Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
-            .unwrap();
-    mesh.holes.is_empty()
-        && (0..topo.num_edges())
-            .all(|e| topo.edge_face_count(e as u32) == 2 && !topo.edge_nonmanifold[e])
-        && topo.vert_tags.iter().all(|t| !t.nonmanifold)
-}
-
 #[test]
 fn cube_is_closed_at_every_rate() {
     let mesh = common::cube_builder().build().unwrap();
@@ -70,7 +59,7 @@ fn corpus_closed_shapes_dice_closed() {
     let mut checked = 0;
     for path in common::catmark_files(&models) {
         let Ok(mesh) = read_obj(&path) else { continue };
-        if !closed(&mesh) {
+        if !common::closed(&mesh) {
             continue;
         }
         let diag = mesh.diagonal();

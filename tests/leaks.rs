@@ -18,16 +18,6 @@ const FAR: [f64; 3] = [148376.0, 1234.0, -223423.0];
 /// Triangle budget per case: shapes whose dicing at a rate exceeds it skip that rate (printed).
 const MAX_TRIANGLES: usize = 1_500_000;
 
-fn closed(mesh: &ControlMesh) -> bool {
-    let topo =
-        limitray::mesh::Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
-            .unwrap();
-    mesh.holes.is_empty()
-        && (0..topo.num_edges())
-            .all(|e| topo.edge_face_count(e as u32) == 2 && !topo.edge_nonmanifold[e])
-        && topo.vert_tags.iter().all(|t| !t.nonmanifold)
-}
-
 fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, MeshBvh) {
     let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
     let d = dice(
@@ -137,7 +127,7 @@ fn corpus_closed_shapes_do_not_leak() {
     let mut rays = 0usize;
     for path in common::catmark_files(&models) {
         let Ok(mesh) = read_obj(&path) else { continue };
-        if !closed(&mesh) {
+        if !common::closed(&mesh) {
             continue;
         }
         let name = path.file_stem().unwrap().to_string_lossy().to_string();

@@ -8,6 +8,7 @@
 
 use super::ray::{Hit, Ray};
 use crate::patch::PatchTable;
+use crate::vec3::{cross, dot, norm};
 
 /// An intersection with the exact limit surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -91,20 +92,4 @@ pub fn refine_hit(table: &PatchTable, ray: &Ray, hit: &Hit) -> Option<ExactHit> 
     }
     let b = best?;
     (b.residual <= 1e-9 * scale).then_some(b)
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }

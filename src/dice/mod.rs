@@ -28,6 +28,7 @@ use crate::mesh::ControlMesh;
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
+use crate::vec3::{cross, norm};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -131,18 +132,6 @@ fn eval_point(table: &PatchTable, face: u32, k: u8, u: f64, v: f64) -> Result<Po
         n: n.map(|x| x as f32),
         param: (face, k, u as f32, v as f32),
     })
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 /// The point at fraction `t ∈ [0, 1]` along face edge `m` of face `f` (from its vertex `m`

@@ -9,6 +9,7 @@ use super::{face_edge_param, DiceOptions};
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::PatchTable;
 use crate::refine::Level;
+use crate::vec3::norm;
 use rayon::prelude::*;
 
 /// How densely to dice.
@@ -177,8 +178,4 @@ pub fn edge_rates(table: &PatchTable, level: &Level, opts: &DiceOptions) -> Resu
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }

@@ -117,3 +117,15 @@ pub fn cube_builder() -> limitray::mesh::MeshBuilder {
         .positions(p)
         .faces(&[4; 6], &CUBE_FACES)
 }
+
+/// True if the control mesh is closed and manifold: no holes, every edge has two faces, no
+/// non-manifold vertex.
+pub fn closed(mesh: &limitray::mesh::ControlMesh) -> bool {
+    let topo =
+        limitray::mesh::Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
+            .unwrap();
+    mesh.holes.is_empty()
+        && (0..topo.num_edges())
+            .all(|e| topo.edge_face_count(e as u32) == 2 && !topo.edge_nonmanifold[e])
+        && topo.vert_tags.iter().all(|t| !t.nonmanifold)
+}
