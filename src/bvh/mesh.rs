@@ -107,8 +107,14 @@ fn union(a: Bounds, b: Bounds) -> Bounds {
 const EMPTY: Bounds = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
 
 impl MeshBvh {
-    /// Builds the BVH of `diced`.
+    /// Builds the BVH of `diced` with obvhs's medium preset (no spatial splits).
     pub fn build(diced: DicedMesh) -> MeshBvh {
+        MeshBvh::build_with(diced, BvhBuildParams::medium_build())
+    }
+
+    /// Builds the BVH of `diced` with obvhs build parameters `params` (spatial pre-splits are
+    /// turned off: a leaf's box must contain its whole triangles).
+    pub fn build_with(diced: DicedMesh, params: BvhBuildParams) -> MeshBvh {
         let prims: Vec<TriBox> = diced
             .triangles
             .iter()
@@ -124,7 +130,7 @@ impl MeshBvh {
                 widened_planes: 0,
             };
         }
-        let mut params = BvhBuildParams::medium_build();
+        let mut params = params;
         params.pre_split = false;
         let mut cwbvh = build_cwbvh(&prims, params, &mut std::time::Duration::default());
         let tri_index = cwbvh.primitive_indices.clone();
@@ -164,6 +170,11 @@ impl MeshBvh {
             return;
         }
         let mut tmax = r.tmax;
+        let pf = Prefetch {
+            boxes: &self.boxes,
+            nodes: &self.cwbvh.nodes,
+            tris: &self.tri_verts,
+        };
         let mut state = self.cwbvh.new_traversal(Vec3A::from(r.d));
         let mut node: &CwBvhNode;
         obvhs::traverse!(
@@ -175,12 +186,18 @@ impl MeshBvh {
                 &self.boxes[node_index(&self.cwbvh, node)],
                 r,
                 state.oct_inv4,
-                tmax
+                tmax,
+                pf
             ),
             {
                 let (t, s) = leaf(state.primitive_id as usize, tmax);
                 tmax = t;
                 if s {
+                    // `break` alone would only leave the macro's loop over this leaf's
+                    // primitives: empty the traversal state so that it ends here.
+                    state.stack.clear();
+                    state.current_group = UVec2::ZERO;
+                    state.primitive_group = UVec2::ZERO;
                     break;
                 }
             }
@@ -290,16 +307,30 @@ pub fn wide_hitmask(
     r: &PreparedRay,
     oct_inv4: u32,
     tmax: f32,
+    prefetch: Prefetch,
 ) -> u32 {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: SSE2 is part of the x86_64 baseline.
-        unsafe { wide_hitmask_sse(node, b, r, oct_inv4, tmax) }
+        unsafe { wide_hitmask_sse(node, b, r, oct_inv4, tmax, prefetch) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
+        let _ = prefetch;
         wide_hitmask_scalar(node, b, r, oct_inv4, tmax)
     }
+}
+
+/// What the node test may prefetch for the children it finds hit: their boxes and nodes, and
+/// the triangles of hit leaves (traversal is bound by memory latency on large meshes).
+#[derive(Clone, Copy)]
+pub struct Prefetch<'a> {
+    /// Exact child boxes of all nodes.
+    pub boxes: &'a [WideBoxes],
+    /// All nodes.
+    pub nodes: &'a [CwBvhNode],
+    /// Leaf-ordered triangles (empty for the top level).
+    pub tris: &'a [[[f32; 3]; 3]],
 }
 
 /// Scalar reference of [`wide_hitmask`].
@@ -351,6 +382,7 @@ unsafe fn wide_hitmask_sse(
     r: &PreparedRay,
     oct_inv4: u32,
     tmax: f32,
+    pf: Prefetch,
 ) -> u32 {
     use std::arch::x86_64::*;
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
@@ -380,6 +412,26 @@ unsafe fn wide_hitmask_sse(
             hit &= hit - 1;
             let c = h * 4 + j;
             mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
+            if node.child_meta[c] == 0 {
+                continue;
+            }
+            if node.is_leaf(c) {
+                let (start, _) = node.child_primitives(c);
+                if let Some(t) = pf.tris.get(start as usize) {
+                    let p = t.as_ptr() as *const i8;
+                    _mm_prefetch::<_MM_HINT_T0>(p);
+                    _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+                }
+            } else {
+                let i = node.child_node_index(c) as usize;
+                if let (Some(bx), Some(nd)) = (pf.boxes.get(i), pf.nodes.get(i)) {
+                    let p = bx as *const WideBoxes as *const i8;
+                    _mm_prefetch::<_MM_HINT_T0>(p);
+                    _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+                    _mm_prefetch::<_MM_HINT_T0>(p.add(128));
+                    _mm_prefetch::<_MM_HINT_T0>(nd as *const CwBvhNode as *const i8);
+                }
+            }
         }
     }
     mask
@@ -538,7 +590,18 @@ mod tests {
             let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
             for tmax in [f32::INFINITY, 1.0] {
                 assert_eq!(
-                    wide_hitmask(&node, &b, &r, 0x0707_0707, tmax),
+                    wide_hitmask(
+                        &node,
+                        &b,
+                        &r,
+                        0x0707_0707,
+                        tmax,
+                        Prefetch {
+                            boxes: &[],
+                            nodes: &[],
+                            tris: &[]
+                        }
+                    ),
                     wide_hitmask_scalar(&node, &b, &r, 0x0707_0707, tmax)
                 );
             }

@@ -201,13 +201,23 @@ impl SceneBvh {
                 &self.top_boxes[super::mesh::node_index(&self.top, node)],
                 &r,
                 state.oct_inv4,
-                tmax
+                tmax,
+                super::mesh::Prefetch {
+                    boxes: &self.top_boxes,
+                    nodes: &self.top.nodes,
+                    tris: &[],
+                }
             ),
             {
                 let inst = self.top_index[state.primitive_id as usize];
                 let (t, stop) = leaf(inst, tmax);
                 tmax = t;
                 if stop {
+                    // `break` alone would only leave the macro's loop over this leaf's
+                    // primitives: empty the traversal state so that it ends here.
+                    state.stack.clear();
+                    state.current_group = UVec2::ZERO;
+                    state.primitive_group = UVec2::ZERO;
                     break;
                 }
             }
