@@ -17,8 +17,8 @@ THREADS="${THREADS:-1 2}"
 CAR="$ROOT/../shared/models/opensubdiv/catmark_car.obj"
 cargo build --release --quiet
 BIN="$ROOT/target/release/limitray"
-echo "| mesh | rate | threads | triangles | table ms | dice ms | BVH ms | bytes/triangle | coherent Mrays/s | incoherent Mrays/s |"
-echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+echo "| mesh | rate | threads | triangles | table ms | dice ms | BVH ms | bytes/triangle | coherent Mrays/s | incoherent Mrays/s | incoherent any-hit Mrays/s |"
+echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
 for config in $CONFIGS; do
     mesh="${config%%:*}"
     rate="${config##*:}"
@@ -31,7 +31,8 @@ import json, sys
 j = json.loads(sys.argv[3])
 cols = [sys.argv[1], sys.argv[2], j["threads"], format(j["triangles"], ","), round(j["table_ms"]),
         round(j["dice_ms"]), round(j["bvh_ms"]), round(j["bytes_per_triangle"]),
-        "%.2f" % j["coherent_mrays_per_s"], "%.2f" % j["incoherent_mrays_per_s"]]
+        "%.2f" % j["coherent_mrays_per_s"], "%.2f" % j["incoherent_mrays_per_s"],
+        "%.2f" % j["incoherent_anyhit_mrays_per_s"]]
 print("| " + " | ".join(str(c) for c in cols) + " |")
 ' "$name" "$rate" "$json"
     done

@@ -8,6 +8,7 @@ use crate::dice::{dice, DiceOptions, DiceRate, DicedMesh};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
 use crate::patch::{PatchOptions, PatchTable};
+use rayon::prelude::*;
 use std::io::{BufRead, Write};
 
 /// Dicing options of the command line.
@@ -366,6 +367,20 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<String> {
             ));
             fields.push(format!("\"{name}_hits\":{hits}"));
         }
+        // Any-hit (shadow) queries on the incoherent rays.
+        let rays = &sets[1].1;
+        let mut times = Vec::new();
+        for _ in 0..args.reps.max(1) {
+            let t = std::time::Instant::now();
+            let n = rays.par_iter().with_min_len(256).filter(|r| bvh.occluded(r)).count();
+            times.push(t.elapsed().as_secs_f64());
+            std::hint::black_box(n);
+        }
+        times.sort_by(f64::total_cmp);
+        fields.push(format!(
+            "\"incoherent_anyhit_mrays_per_s\":{:.3}",
+            rays.len() as f64 / times[times.len() / 2] / 1e6
+        ));
         Ok(format!("{{{}}}", fields.join(",")))
     })
 }

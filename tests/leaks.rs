@@ -16,7 +16,7 @@ use limitray::probe::{aimed_rays, count_leaks, inside_origins, sphere_dirs};
 const RATES: [u32; 5] = [1, 2, 4, 16, 64];
 const FAR: [f64; 3] = [148376.0, 1234.0, -223423.0];
 /// Triangle budget per case: shapes whose dicing at a rate exceeds it skip that rate (printed).
-const MAX_TRIANGLES: usize = 1_500_000;
+const MAX_TRIANGLES: usize = 4_000_000;
 
 fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, MeshBvh) {
     let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
