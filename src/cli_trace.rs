@@ -372,7 +372,11 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<String> {
         let mut times = Vec::new();
         for _ in 0..args.reps.max(1) {
             let t = std::time::Instant::now();
-            let n = rays.par_iter().with_min_len(256).filter(|r| bvh.occluded(r)).count();
+            let n = rays
+                .par_iter()
+                .with_min_len(256)
+                .filter(|r| bvh.occluded(r))
+                .count();
             times.push(t.elapsed().as_secs_f64());
             std::hint::black_box(n);
         }

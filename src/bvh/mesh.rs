@@ -35,6 +35,8 @@ pub struct MeshBvh {
     pub boxes: Vec<WideBoxes>,
     /// Number of child planes that had to be widened after quantisation.
     pub widened_planes: usize,
+    /// Number of node levels (the traversal stack needs at most one entry per level).
+    pub depth: usize,
 }
 
 /// The exact bounds of a node's eight children, structure of arrays (empty slots are empty
@@ -128,15 +130,17 @@ impl MeshBvh {
                 tri_index: Vec::new(),
                 boxes: Vec::new(),
                 widened_planes: 0,
+                depth: 0,
             };
         }
         let mut params = params;
         params.pre_split = false;
-        let mut cwbvh = build_cwbvh(&prims, params, &mut std::time::Duration::default());
+        let mut cwbvh =
+            build_deep(|| build_cwbvh(&prims, params, &mut std::time::Duration::default()));
         let tri_index = cwbvh.primitive_indices.clone();
         let tri_verts: Vec<[[f32; 3]; 3]> =
             tri_index.iter().map(|&i| prims[i as usize].0).collect();
-        let (widened_planes, boxes) = make_conservative(&mut cwbvh, &tri_verts);
+        let (widened_planes, boxes, depth) = make_conservative(&mut cwbvh, &tri_verts);
         MeshBvh {
             diced,
             cwbvh,
@@ -144,6 +148,7 @@ impl MeshBvh {
             tri_index,
             boxes,
             widened_planes,
+            depth,
         }
     }
 
@@ -162,46 +167,16 @@ impl MeshBvh {
         self.diced.bounds()
     }
 
-    /// Traverses with `ray`, calling `leaf(prepared_ray, leaf_index, tmax)` for each
-    /// triangle whose leaf box is met; `leaf` returns the new `tmax` and whether to stop.
+    /// Traverses with `ray`, calling `leaf(leaf_index, tmax)` for each triangle whose leaf
+    /// box is met; `leaf` returns the new `tmax` and whether to stop.
     #[inline(always)]
-    fn traverse(&self, r: &PreparedRay, mut leaf: impl FnMut(usize, f32) -> (f32, bool)) {
-        if self.cwbvh.nodes.is_empty() {
-            return;
-        }
-        let mut tmax = r.tmax;
+    fn traverse(&self, r: &PreparedRay, leaf: impl FnMut(usize, f32) -> (f32, bool)) {
         let pf = Prefetch {
             boxes: &self.boxes,
             nodes: &self.cwbvh.nodes,
             tris: &self.tri_verts,
         };
-        let mut state = self.cwbvh.new_traversal(Vec3A::from(r.d));
-        let mut node: &CwBvhNode;
-        obvhs::traverse!(
-            self.cwbvh,
-            node,
-            state,
-            wide_hitmask(
-                node,
-                &self.boxes[node_index(&self.cwbvh, node)],
-                r,
-                state.oct_inv4,
-                tmax,
-                pf
-            ),
-            {
-                let (t, s) = leaf(state.primitive_id as usize, tmax);
-                tmax = t;
-                if s {
-                    // `break` alone would only leave the macro's loop over this leaf's
-                    // primitives: empty the traversal state so that it ends here.
-                    state.stack.clear();
-                    state.current_group = UVec2::ZERO;
-                    state.primitive_group = UVec2::ZERO;
-                    break;
-                }
-            }
-        );
+        walk(&self.cwbvh, self.depth, pf, r, leaf);
     }
 
     /// Closest hit of `ray` in `[tmin, tmax]`.
@@ -286,6 +261,21 @@ impl MeshBvh {
             level: info.level,
         }
     }
+}
+
+/// Runs an obvhs build on a thread with a large stack: its tree conversion recurses once per
+/// level of the binary hierarchy, which degenerate input (many coincident triangles, e.g. a
+/// thin shape far from the origin) makes thousands of levels deep.
+pub(crate) fn build_deep<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .name("limitray-bvh".into())
+            .stack_size(1 << 30)
+            .spawn_scoped(s, f)
+            .expect("spawn the BVH build thread")
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })
 }
 
 /// Normalises `v` (zero stays zero).
@@ -438,13 +428,15 @@ unsafe fn wide_hitmask_sse(
 }
 
 /// Widens quantised child boxes until, as decoded, they contain everything below them.
-/// Returns the number of planes moved and the exact bounds of every node's children.
+/// Returns the number of planes moved, the exact bounds of every node's children and the
+/// number of node levels.
 pub(crate) fn make_conservative(
     bvh: &mut CwBvh,
     tri_verts: &[[[f32; 3]; 3]],
-) -> (usize, Vec<WideBoxes>) {
+) -> (usize, Vec<WideBoxes>, usize) {
     let n = bvh.nodes.len();
     let mut content = vec![EMPTY; n];
+    let mut height = vec![1usize; n];
     let mut boxes = vec![WideBoxes::default(); n];
     let mut widened = 0;
     for i in (0..n).rev() {
@@ -466,6 +458,7 @@ pub(crate) fn make_conservative(
             } else {
                 let ci = node.child_node_index(c) as usize;
                 assert!(ci > i, "CWBVH children follow their parents");
+                height[i] = height[i].max(height[ci] + 1);
                 content[ci]
             };
         }
@@ -510,7 +503,99 @@ pub(crate) fn make_conservative(
             }
         }
     }
-    (widened, boxes)
+    (widened, boxes, height.first().copied().unwrap_or(0))
+}
+
+/// Traversal state with the fields obvhs's `traverse!` macro uses, over any stack.
+struct Walk<S> {
+    stack: S,
+    current_group: UVec2,
+    primitive_group: UVec2,
+    oct_inv4: u32,
+    primitive_id: u32,
+    hitmask: u32,
+}
+
+/// Entries of the fixed traversal stack; deeper hierarchies use a growable one. (obvhs's own
+/// 32-entry stack overwrites its top entry when full, which would skip subtrees.)
+const STACK: usize = 64;
+
+/// Walks `bvh` (of `depth` levels) with the conservative node test on the exact boxes in
+/// `pf`, calling `leaf(leaf_index, tmax)` for the primitives of every leaf met; `leaf`
+/// returns the new `tmax` and whether to stop.
+#[inline(always)]
+pub(crate) fn walk(
+    bvh: &CwBvh,
+    depth: usize,
+    pf: Prefetch,
+    r: &PreparedRay,
+    mut leaf: impl FnMut(usize, f32) -> (f32, bool),
+) {
+    if bvh.nodes.is_empty() {
+        return;
+    }
+    if depth < STACK {
+        walk_with(
+            bvh,
+            obvhs::faststack::StackStack::<UVec2, STACK>::default(),
+            pf,
+            r,
+            &mut leaf,
+        );
+    } else {
+        walk_with(bvh, Vec::<UVec2>::with_capacity(depth), pf, r, &mut leaf);
+    }
+}
+
+#[inline(always)]
+fn walk_with<S: obvhs::faststack::FastStack<UVec2>>(
+    bvh: &CwBvh,
+    stack: S,
+    pf: Prefetch,
+    r: &PreparedRay,
+    leaf: &mut impl FnMut(usize, f32) -> (f32, bool),
+) {
+    // The octant code of obvhs (`ray_get_octant_inv4`): child order front to back.
+    let d = r.d;
+    let oct_inv4 = (if d[0] < 0.0 { 0 } else { 0x0404_0404 })
+        | (if d[1] < 0.0 { 0 } else { 0x0202_0202 })
+        | (if d[2] < 0.0 { 0 } else { 0x0101_0101 });
+    let mut state = Walk {
+        stack,
+        current_group: UVec2::new(0, 0x8000_0000),
+        primitive_group: UVec2::ZERO,
+        oct_inv4,
+        primitive_id: 0,
+        hitmask: 0,
+    };
+    let mut tmax = r.tmax;
+    let mut node: &CwBvhNode;
+    obvhs::traverse!(
+        bvh,
+        node,
+        state,
+        wide_hitmask(
+            node,
+            &pf.boxes[node_index(bvh, node)],
+            r,
+            state.oct_inv4,
+            tmax,
+            pf
+        ),
+        {
+            let (t, s) = leaf(state.primitive_id as usize, tmax);
+            tmax = t;
+            if s {
+                // `break` alone would only leave the macro's loop over this leaf's
+                // primitives: empty the traversal state so that it ends here.
+                state.stack.clear();
+                state.current_group = UVec2::ZERO;
+                state.primitive_group = UVec2::ZERO;
+                break;
+            }
+        }
+    );
+    let _ = state.hitmask;
 }
 
 /// Index of `node` in `bvh.nodes` (the traversal macro hands out references).

@@ -9,10 +9,8 @@
 use super::mesh::{normalize, MeshBvh};
 use super::ray::{Hit, Ray};
 use super::triangle::PreparedRay;
-// `UVec2` is named inside obvhs's `traverse!` macro.
-use glam::{Affine3A, Mat3A, UVec2, Vec3A};
+use glam::{Affine3A, Mat3A, Vec3A};
 use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
 use std::sync::Arc;
@@ -44,6 +42,8 @@ pub struct SceneBvh {
     pub(crate) top_index: Vec<u32>,
     /// Exact child bounds of the top-level nodes.
     pub(crate) top_boxes: Vec<super::mesh::WideBoxes>,
+    /// Levels of the top-level hierarchy.
+    pub(crate) top_depth: usize,
 }
 
 struct InstBox(([f32; 3], [f32; 3]));
@@ -137,7 +137,9 @@ impl SceneBvh {
         let mut params = BvhBuildParams::medium_build();
         params.pre_split = false;
         params.max_prims_per_leaf = 1;
-        let mut top = build_cwbvh(&boxes, params, &mut std::time::Duration::default());
+        let mut top = super::mesh::build_deep(|| {
+            build_cwbvh(&boxes, params, &mut std::time::Duration::default())
+        });
         self.top_index = top
             .primitive_indices
             .iter()
@@ -151,7 +153,9 @@ impl SceneBvh {
                 [b.0, b.1, b.1]
             })
             .collect();
-        self.top_boxes = super::mesh::make_conservative(&mut top, &corners).1;
+        let (_, boxes, depth) = super::mesh::make_conservative(&mut top, &corners);
+        self.top_boxes = boxes;
+        self.top_depth = depth;
         self.top = top;
     }
 
@@ -183,45 +187,17 @@ impl SceneBvh {
     }
 
     fn traverse(&self, ray: &Ray, mut leaf: impl FnMut(u32, f32) -> (f32, bool)) {
-        if self.top.nodes.is_empty() {
-            return;
-        }
         let Some(r) = PreparedRay::new(ray) else {
             return;
         };
-        let mut tmax = ray.tmax;
-        let mut state = self.top.new_traversal(Vec3A::from(ray.dir));
-        let mut node: &CwBvhNode;
-        obvhs::traverse!(
-            self.top,
-            node,
-            state,
-            super::mesh::wide_hitmask(
-                node,
-                &self.top_boxes[super::mesh::node_index(&self.top, node)],
-                &r,
-                state.oct_inv4,
-                tmax,
-                super::mesh::Prefetch {
-                    boxes: &self.top_boxes,
-                    nodes: &self.top.nodes,
-                    tris: &[],
-                }
-            ),
-            {
-                let inst = self.top_index[state.primitive_id as usize];
-                let (t, stop) = leaf(inst, tmax);
-                tmax = t;
-                if stop {
-                    // `break` alone would only leave the macro's loop over this leaf's
-                    // primitives: empty the traversal state so that it ends here.
-                    state.stack.clear();
-                    state.current_group = UVec2::ZERO;
-                    state.primitive_group = UVec2::ZERO;
-                    break;
-                }
-            }
-        );
+        let pf = super::mesh::Prefetch {
+            boxes: &self.top_boxes,
+            nodes: &self.top.nodes,
+            tris: &[],
+        };
+        super::mesh::walk(&self.top, self.top_depth, pf, &r, |li, tmax| {
+            leaf(self.top_index[li], tmax)
+        });
     }
 
     /// Closest hit.
