@@ -93,3 +93,53 @@ fn instances_share_a_mesh_and_transform_hits() {
     let b = scene.bounds();
     assert!(b[0][0] < -10.0 && b[1][0] > 10.0 && b[1][2] > 20.0);
 }
+
+/// A degenerate mesh (tens of thousands of coincident triangles, as a thin shape far from the
+/// origin dices into) makes a hierarchy deeper than the fixed traversal stack: the growable
+/// stack takes over and every triangle is still reachable.
+#[test]
+fn deep_hierarchies_are_traversed_completely() {
+    use limitray::dice::{DicedMesh, TriInfo};
+    let n = 12_000u32;
+    let mut d = DicedMesh::default();
+    for i in 0..n {
+        // All triangles on top of each other, but for one far corner that differs.
+        let x = if i % 1000 == 0 {
+            1.0 + i as f32 * 1e-3
+        } else {
+            1.0
+        };
+        for p in [[0.0, 0.0, 0.0], [x, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+            d.positions.push(p);
+            d.normals.push([0.0, 0.0, 1.0]);
+            d.params.push((0, 0, 0.0, 0.0));
+        }
+        d.triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        d.tri_info.push(TriInfo {
+            face: i,
+            k: 0,
+            level: 0,
+            uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+        });
+    }
+    let bvh = MeshBvh::build(d);
+    eprintln!("depth {}", bvh.depth);
+    assert!(
+        bvh.depth >= 64,
+        "depth {} does not exercise the growable stack",
+        bvh.depth
+    );
+    // The far corners of every 1000th triangle are each hit by their own ray.
+    for i in (1000..n).step_by(1000) {
+        let x = 1.0 + i as f32 * 1e-3;
+        let ray = Ray::new([x - 0.25, 0.001, 1.0], [0.0, 0.0, -1.0]);
+        let h = bvh
+            .intersect(&ray)
+            .expect("a triangle of the deep hierarchy");
+        assert!(
+            h.face >= i && bvh.occluded(&ray),
+            "ray {i}: face {}",
+            h.face
+        );
+    }
+}

@@ -263,19 +263,21 @@ impl MeshBvh {
     }
 }
 
-/// Runs an obvhs build on a thread with a large stack: its tree conversion recurses once per
-/// level of the binary hierarchy, which degenerate input (many coincident triangles, e.g. a
-/// thin shape far from the origin) makes thousands of levels deep.
+/// Runs an obvhs build in a thread pool of its own whose threads have large stacks: obvhs's
+/// tree conversion recurses once per level of the binary hierarchy, which degenerate input
+/// (many coincident triangles, e.g. a thin shape far from the origin) makes thousands of
+/// levels deep. A pool of its own, rather than one spawned thread, also keeps builds that are
+/// started from rayon workers (several meshes built in parallel) from waiting on each other.
 pub(crate) fn build_deep<T: Send>(f: impl FnOnce() -> T + Send) -> T {
-    std::thread::scope(|s| {
-        std::thread::Builder::new()
-            .name("limitray-bvh".into())
-            .stack_size(1 << 30)
-            .spawn_scoped(s, f)
-            .expect("spawn the BVH build thread")
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e))
-    })
+    match rayon::ThreadPoolBuilder::new()
+        .num_threads(rayon::current_num_threads())
+        .stack_size(1 << 30)
+        .thread_name(|i| format!("limitray-bvh-{i}"))
+        .build()
+    {
+        Ok(pool) => pool.install(f),
+        Err(_) => f(),
+    }
 }
 
 /// Normalises `v` (zero stays zero).
