@@ -346,24 +346,6 @@ pub fn wide_hitmask_scalar(
     mask
 }
 
-/// The node test on the quantised boxes of `node` as the traversal of a compact upload
-/// decodes them (`p + 2^e · q`); the reference for ports that keep only the 80-byte nodes.
-#[inline(always)]
-pub fn node_hitmask_scalar(node: &CwBvhNode, r: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let mut mask = 0u32;
-    for c in 0..8 {
-        if node.child_meta[c] == 0 {
-            continue;
-        }
-        let (lo, hi) = child_box(node, c);
-        if r.hits_box(lo, hi, tmax) {
-            mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
-        }
-    }
-    mask
-}
-
 /// Four children at a time with SSE; bit for bit the scalar test (`max`/`min` keep the
 /// bound when the slab distance is NaN, as `f32::max` does).
 #[cfg(target_arch = "x86_64")]

@@ -24,16 +24,7 @@ pub fn edge_exact_gpu(ctx: &GpuContext, cases: &[[f32; 4]]) -> Result<Vec<f32>> 
             format!("{} cases are too many for one dispatch", cases.len()),
         ));
     }
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
+    let entry = super::trace::storage_entry;
     let layout = ctx
         .device
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

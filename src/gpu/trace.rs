@@ -103,10 +103,9 @@ impl Default for TraceOptions {
     }
 }
 
-/// The bind group layout of a kernel: the uniform at 0, the geometry chunks at 1..=8, then
-/// `extra` storage buffers (`true`: read-only) from binding 9 on.
-pub fn layout(ctx: &GpuContext, extra: &[bool]) -> wgpu::BindGroupLayout {
-    let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+/// A compute-stage storage-buffer entry of a bind group layout.
+pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
@@ -115,7 +114,13 @@ pub fn layout(ctx: &GpuContext, extra: &[bool]) -> wgpu::BindGroupLayout {
             min_binding_size: None,
         },
         count: None,
-    };
+    }
+}
+
+/// The bind group layout of a kernel: the uniform at 0, the geometry chunks at 1..=8, then
+/// `extra` storage buffers (`true`: read-only) from binding 9 on.
+pub fn layout(ctx: &GpuContext, extra: &[bool]) -> wgpu::BindGroupLayout {
+    let storage = storage_entry;
     let mut entries = vec![wgpu::BindGroupLayoutEntry {
         binding: 0,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -346,6 +351,14 @@ fn overflow_error(n: usize) -> Error {
     )
 }
 
+/// An error if any ray of `raw` overflowed the traversal bound.
+fn check_overflow(raw: &[RawHit]) -> Result<()> {
+    match raw.iter().filter(|h| h.status == 2).count() {
+        0 => Ok(()),
+        n => Err(overflow_error(n)),
+    }
+}
+
 /// Closest hits of `rays` on one mesh: the answers of [`MeshBvh::intersect`].
 pub fn trace_mesh(
     ctx: &GpuContext,
@@ -355,10 +368,7 @@ pub fn trace_mesh(
 ) -> Result<Vec<Option<Hit>>> {
     let tracer = GpuTracer::new(ctx, PackedScene::from_mesh(bvh)?, opts)?;
     let raw = tracer.trace_raw(rays)?;
-    let over = raw.iter().filter(|h| h.status == 2).count();
-    if over > 0 {
-        return Err(overflow_error(over));
-    }
+    check_overflow(&raw)?;
     Ok(raw
         .iter()
         .map(|h| (h.status == 1).then(|| bvh.hit(h.leaf as usize, h.t, h.b1, h.b2)))
@@ -374,10 +384,7 @@ pub fn trace_scene(
 ) -> Result<Vec<Option<SceneHit>>> {
     let tracer = GpuTracer::new(ctx, PackedScene::from_scene(scene)?, opts)?;
     let raw = tracer.trace_raw(rays)?;
-    let over = raw.iter().filter(|h| h.status == 2).count();
-    if over > 0 {
-        return Err(overflow_error(over));
-    }
+    check_overflow(&raw)?;
     Ok(raw
         .iter()
         .map(|h| {

@@ -103,16 +103,8 @@ pub const CUBE_EDGES: [(u32, u32); 12] = [
 
 /// A builder holding the test cube, to add tags to.
 pub fn cube_builder() -> limitray::mesh::MeshBuilder {
-    let p = vec![
-        [-1.0, -1.0, 1.0],
-        [1.0, -1.0, 1.0],
-        [-1.0, 1.0, 1.0],
-        [1.0, 1.0, 1.0],
-        [-1.0, 1.0, -1.0],
-        [1.0, 1.0, -1.0],
-        [-1.0, -1.0, -1.0],
-        [1.0, -1.0, -1.0],
-    ];
+    // The same vertices as the library's rounded box, here without tags.
+    let p = limitray::mesh::shapes::rounded_box(0.0).positions;
     limitray::mesh::MeshBuilder::new()
         .positions(p)
         .faces(&[4; 6], &CUBE_FACES)
