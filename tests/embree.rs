@@ -272,7 +272,7 @@ fn quad_orientation_and_ngon_packing_on_generated_meshes() {
     for f in [7u32, 14, 20] {
         for &(u, v) in &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.2, 0.6)] {
             let e = scene.interpolate(0, f, u as f32, v as f32).unwrap().p;
-            let x = table.eval(FaceCoord::quad(f as u32, u, v)).unwrap().p;
+            let x = table.eval(FaceCoord::quad(f, u, v)).unwrap().p;
             let d = (0..3)
                 .map(|i| (e[i] as f64 - x[i]).powi(2))
                 .sum::<f64>()

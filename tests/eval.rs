@@ -230,7 +230,7 @@ fn patches_tile_their_faces_and_know_their_domain() {
             let u = p.origin[0] + 0.5 * (p.axis_u[0] + p.axis_v[0]);
             let v = p.origin[1] + 0.5 * (p.axis_u[1] + p.axis_v[1]);
             let s = table
-                .eval(FaceCoord::new(p.face as u32, p.sub_face as u32, u, v))
+                .eval(FaceCoord::new(p.face, p.sub_face as u32, u, v))
                 .unwrap();
             assert!(s.level >= p.level);
         }

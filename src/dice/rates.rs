@@ -130,7 +130,7 @@ pub fn edge_rates(table: &PatchTable, level: &Level, opts: &DiceOptions) -> Resu
         (0..=MEASURE_SEGMENTS)
             .map(|i| {
                 let (k, u, v) = points(i as f64 / MEASURE_SEGMENTS as f64);
-                Ok(table.eval(FaceCoord::new(f as u32, k as u32, u, v))?.p)
+                Ok(table.eval(FaceCoord::new(f as u32, k, u, v))?.p)
             })
             .collect()
     };
