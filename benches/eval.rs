@@ -1,8 +1,8 @@
 //! Criterion benchmarks of exact limit evaluation through the patch table: building the
 //! feature-adaptive [`PatchTable`] (default options: maximum level 10, single-crease patches)
 //! and evaluating batches of 10,000 random `(face, k, u, v)` queries in rayon pools of 1 and 2
-//! threads ([`limitray::bench::eval_queries`], [`limitray::bench::eval_batch`], the pieces of
-//! [`limitray::bench::eval_bench`]).
+//! threads ([`limitray::harness::eval::eval_queries`], [`limitray::harness::eval::eval_batch`], the pieces of
+//! `limitray bench-eval`).
 //!
 //! Mesh: OpenSubdiv's `catmark_car.obj` from the shared models; without it the benchmark
 //! prints a note and measures nothing. Sample counts are small so that `cargo bench --bench
@@ -12,7 +12,7 @@
 use criterion::{
     criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode, Throughput,
 };
-use limitray::bench::{eval_batch, eval_queries};
+use limitray::harness::eval::{eval_batch, eval_queries};
 use limitray::mesh::obj::read_obj;
 use limitray::patch::{PatchOptions, PatchTable};
 use std::hint::black_box;

@@ -3,30 +3,52 @@
 //! The pipeline runs one way, one stage per module:
 //! [`mesh`] (control mesh, tags, validated topology) → [`refine`] (subdivision rules, stencil
 //! tables, limit masks) → [`patch`] (feature-adaptive patch table, exact evaluation) →
-//! [`dice`] (crack-free limit-surface triangles) → [`bvh`] (watertight ray queries) → rendering.
+//! [`dice`] (crack-free limit-surface triangles) → [`bvh`] (watertight ray queries) → `render`
+//! (path tracer, feature `render`) / `gpu` (wgpu compute, feature `gpu`) → `io` (EXR, PNG).
+//! [`harness`] holds the test and benchmark ray sets and probes; `cli` is the command-line tool
+//! (feature `cli`).
+//!
+//! Features: `cli` (default; the `limitray` binary), `render` (default; the path tracer, EXR and
+//! PNG output, TOML scenes), `gpu` (default; the wgpu backend), `embree` (cross-checks and
+//! benchmarks against Embree 4; needs `bash scripts/setup-embree.sh`). The geometry core builds
+//! with `default-features = false`.
 #![warn(missing_docs)]
 // Mesh code indexes several parallel arrays by the same element index; range loops say so.
 #![allow(clippy::needless_range_loop)]
 
-pub mod bench;
 pub mod bvh;
-pub mod cli_eval;
-pub mod cli_render;
-pub mod cli_trace;
+#[cfg(feature = "cli")]
+// Flattened clap argument groups carry their help on their own fields.
+#[allow(missing_docs)]
+pub mod cli;
 pub mod coord;
 pub mod dice;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
+#[cfg(feature = "gpu")]
 pub mod gpu;
-pub mod info;
+pub mod harness;
+#[cfg(feature = "render")]
 pub mod io;
 pub mod mesh;
 pub mod patch;
-pub mod probe;
 pub mod refine;
+#[cfg(feature = "render")]
 pub mod render;
+pub mod surface;
 pub mod vec3;
 
+pub use bvh::exact::ExactHit;
+pub use bvh::{Hit, Ray};
 pub use coord::FaceCoord;
+pub use dice::{DiceOptions, DiceRate, DicedMesh};
 pub use error::{Error, ErrorKind, Result};
+pub use mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod};
+pub use patch::Sample;
+pub use surface::{Surface, SurfaceOptions, TracedSurface};
+
+/// The README's Rust examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

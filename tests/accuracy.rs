@@ -6,12 +6,12 @@ mod common;
 
 use limitray::bvh::MeshBvh;
 use limitray::dice::{dice, DiceOptions, DiceRate};
+use limitray::harness::probe::accuracy;
 use limitray::mesh::obj::read_obj;
 use limitray::patch::{PatchOptions, PatchTable};
-use limitray::probe::accuracy;
 
 /// The bound is the triangle's sampled maximum deviation (order-16 lattice) times 1.1, see
-/// `limitray::probe::triangle_error_bound`; the hit's distance to the surface point at its
+/// `limitray::harness::probe::triangle_error_bound`; the hit's distance to the surface point at its
 /// reported parameters (an upper bound of its distance to the surface) must lie within it,
 /// up to 8 ulps of the ray's coordinates (f32 vertices and t).
 const BOUND_RATIO: f64 = 1.0;

@@ -4,7 +4,7 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A scratch directory under the system temporary directory, removed when dropped.
@@ -64,11 +64,8 @@ f 7 1 3 5
 ";
 
 fn limitray(args: &[&dyn AsRef<std::ffi::OsStr>]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_limitray"));
-    for a in args {
-        cmd.arg(a);
-    }
-    cmd.output().expect("failed to run limitray")
+    let args: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_ref()).collect();
+    common::run_limitray(&args, None)
 }
 
 fn stdout(o: &Output) -> String {

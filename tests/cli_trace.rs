@@ -1,28 +1,16 @@
 //! End-to-end tests of `limitray dice`, `trace` (with and without `--exact`), `accuracy` and
 //! `bench-trace` through the binary.
 
-use std::io::Write;
-use std::process::{Command, Output, Stdio};
+mod common;
+
+use std::process::Output;
 
 fn scene(name: &str) -> String {
     format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
 fn run(args: &[&str], stdin: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_limitray"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(stdin.as_bytes())
-        .unwrap();
-    child.wait_with_output().unwrap()
+    common::run_limitray(args, Some(stdin.as_bytes()))
 }
 
 #[test]

@@ -14,13 +14,13 @@
 mod common;
 
 use glam::{Affine3A, Quat, Vec3};
-use limitray::bench::SplitMix64;
 use limitray::bvh::{MeshBvh, Ray, SceneBvh};
 use limitray::dice::{dice, DiceOptions, DiceRate};
 use limitray::gpu::exact::{edge_exact_gpu, edge_reference};
 use limitray::gpu::{
     context_for_tests, trace_mesh, trace_scene, GpuContext, GpuTracer, PackedScene, TraceOptions,
 };
+use limitray::harness::rng::SplitMix64;
 use limitray::mesh::ControlMesh;
 use limitray::patch::{PatchOptions, PatchTable};
 use std::sync::Arc;
@@ -77,17 +77,17 @@ fn meshes() -> Vec<(String, ControlMesh, u32)> {
 /// inside-out random, and bounded-interval rays.
 fn ray_set(bvh: &MeshBvh, n: usize, seed: u64) -> Vec<Ray> {
     let b = bvh.bounds();
-    let mut rays = limitray::cli_trace::camera_rays(b, n);
-    rays.extend(limitray::cli_trace::random_rays(b, n, seed));
+    let mut rays = limitray::harness::rays::camera_rays(b, n);
+    rays.extend(limitray::harness::rays::random_rays(b, n, seed));
     let outside = [
         b[1][0] + 0.7 * (b[1][0] - b[0][0]),
         b[1][1] + 0.3,
         b[1][2] + 1.1 * (b[1][2] - b[0][2]) + 0.2,
     ];
-    rays.extend(limitray::probe::aimed_rays(&bvh.diced, outside, n));
+    rays.extend(limitray::harness::probe::aimed_rays(&bvh.diced, outside, n));
     let centre: [f32; 3] = std::array::from_fn(|i| 0.5 * (b[0][i] + b[1][i]));
-    rays.extend(limitray::probe::aimed_rays(&bvh.diced, centre, n));
-    for (i, d) in limitray::probe::sphere_dirs(n / 2, seed + 1)
+    rays.extend(limitray::harness::probe::aimed_rays(&bvh.diced, centre, n));
+    for (i, d) in limitray::harness::probe::sphere_dirs(n / 2, seed + 1)
         .into_iter()
         .enumerate()
     {
@@ -301,8 +301,8 @@ fn scene() -> (SceneBvh, Vec<Ray>) {
     }
     s.build();
     let bounds = s.bounds();
-    let mut rays = limitray::cli_trace::camera_rays(bounds, 4000);
-    rays.extend(limitray::cli_trace::random_rays(bounds, 4000, 21));
+    let mut rays = limitray::harness::rays::camera_rays(bounds, 4000);
+    rays.extend(limitray::harness::rays::random_rays(bounds, 4000, 21));
     (s, rays)
 }
 
@@ -353,7 +353,7 @@ fn scene_hits_are_bitwise_the_cpu_hits() {
 fn overflow_and_bad_adapter_are_errors() {
     let Some(ctx) = ctx() else { return };
     let bvh = build(&common::cube_builder().build().unwrap(), 4);
-    let rays = limitray::cli_trace::camera_rays(bvh.bounds(), 64);
+    let rays = limitray::harness::rays::camera_rays(bvh.bounds(), 64);
     let e = trace_mesh(
         &ctx,
         &bvh,
@@ -476,11 +476,11 @@ fn gpu_does_not_leak() {
             }
             let bvh = build(&mesh, 8);
             let mut rays = Vec::new();
-            for o in limitray::probe::inside_origins(&bvh.diced, 4, 0.3, 1) {
-                for d in limitray::probe::sphere_dirs(3000, 2) {
+            for o in limitray::harness::probe::inside_origins(&bvh.diced, 4, 0.3, 1) {
+                for d in limitray::harness::probe::sphere_dirs(3000, 2) {
                     rays.push(Ray::new(o, d));
                 }
-                rays.extend(limitray::probe::aimed_rays(&bvh.diced, o, 2000));
+                rays.extend(limitray::harness::probe::aimed_rays(&bvh.diced, o, 2000));
             }
             assert!(rays.len() > 5000);
             let hits = trace_mesh(&ctx, &bvh, &rays, TraceOptions::default()).unwrap();

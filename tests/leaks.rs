@@ -8,10 +8,10 @@ mod common;
 
 use limitray::bvh::{MeshBvh, Ray};
 use limitray::dice::{dice, DiceOptions, DiceRate};
+use limitray::harness::probe::{aimed_rays, count_leaks, inside_origins, sphere_dirs};
 use limitray::mesh::obj::read_obj;
 use limitray::mesh::ControlMesh;
 use limitray::patch::{PatchOptions, PatchTable};
-use limitray::probe::{aimed_rays, count_leaks, inside_origins, sphere_dirs};
 
 const RATES: [u32; 5] = [1, 2, 4, 16, 64];
 const FAR: [f64; 3] = [148376.0, 1234.0, -223423.0];

@@ -3,6 +3,8 @@
 //! the exr crate's reader with the documented channels, and the `render` command end to end
 //! (including located scene-file errors with exit code 2).
 
+mod common;
+
 use limitray::io::exr::{read_channels, write_planes};
 use limitray::render::output::{write_film, CHANNELS};
 use limitray::render::scene::parse_scene;
@@ -374,7 +376,7 @@ fn exr_reads_back_with_documented_channels() {
 }
 
 fn limitray() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_limitray"))
+    common::limitray_command()
 }
 
 #[test]

@@ -44,7 +44,7 @@ fn instances_share_a_mesh_and_transform_hits() {
     }
     scene.build();
     assert_eq!(scene.num_instances(), 3);
-    let mut rng = limitray::bench::SplitMix64(9);
+    let mut rng = limitray::harness::rng::SplitMix64(9);
     let mut hits = 0;
     for _ in 0..5000 {
         let i = rng.below(3);

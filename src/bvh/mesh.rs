@@ -632,7 +632,7 @@ mod tests {
     /// axis-parallel rays included; both contain every hit of the quantised test.
     #[test]
     fn sse_node_test_matches_scalar() {
-        let mut rng = crate::bench::SplitMix64(5);
+        let mut rng = crate::harness::rng::SplitMix64(5);
         let mut f = |s: f64| ((rng.next_f64() - 0.5) * s) as f32;
         for i in 0..20000 {
             let mut node = CwBvhNode::default();

@@ -10,7 +10,6 @@
 //! The library is set up by `scripts/setup-embree.sh` and linked by `build.rs`.
 
 pub mod bench;
-pub mod cli;
 pub mod crosscheck;
 pub mod ffi;
 pub mod rays;

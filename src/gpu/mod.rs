@@ -12,7 +12,6 @@
 //! [`render`] (the path tracer, `render --backend gpu`), [`exact`] (the exact edge function,
 //! for tests), [`cli`] (command-line pieces).
 
-pub mod cli;
 pub mod device;
 pub mod exact;
 pub mod geometry;

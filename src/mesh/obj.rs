@@ -77,33 +77,101 @@ pub fn read_obj(path: &Path) -> Result<ControlMesh> {
 ///
 /// Offsets that decrease or run past `face_verts` give an [`std::io::ErrorKind::InvalidInput`]
 /// error.
-pub fn write_obj(
-    w: &mut impl Write,
+pub fn write_obj<W: Write + ?Sized>(
+    w: &mut W,
     positions: &[[f64; 3]],
     face_offsets: &[u32],
     face_verts: &[u32],
 ) -> std::io::Result<()> {
-    for p in positions {
-        writeln!(w, "v {:?} {:?} {:?}", p[0], p[1], p[2])?;
+    let mut o = ObjWriter::new(w);
+    o.vertices("v", positions)?;
+    o.faces(face_offsets, face_verts, false)
+}
+
+/// The one OBJ writer: statements in OBJ's order (comments, vertex data, faces, tags), numbers
+/// in the shortest form that reads back to the same value (`{:?}`), indices 1-based.
+pub struct ObjWriter<'a, W: Write + ?Sized> {
+    w: &'a mut W,
+}
+
+impl<'a, W: Write + ?Sized> ObjWriter<'a, W> {
+    /// A writer over `w`.
+    pub fn new(w: &'a mut W) -> Self {
+        ObjWriter { w }
     }
-    for pair in face_offsets.windows(2) {
-        let (a, b) = (pair[0] as usize, pair[1] as usize);
-        let face = face_verts.get(a..b).ok_or_else(|| {
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                format!(
-                    "face offsets {a}..{b} do not fit {} face-vertices",
-                    face_verts.len()
-                ),
-            )
-        })?;
-        w.write_all(b"f")?;
-        for &v in face {
-            write!(w, " {}", u64::from(v) + 1)?;
+
+    /// One `# line` comment per line of `text`.
+    pub fn comment(&mut self, text: &str) -> std::io::Result<()> {
+        for line in text.lines() {
+            writeln!(self.w, "# {line}")?;
         }
-        w.write_all(b"\n")?;
+        Ok(())
     }
-    Ok(())
+
+    /// One `tag x y …` line per row (`v`, `vn`, `vt`).
+    pub fn vertices<T: std::fmt::Debug, const N: usize>(
+        &mut self,
+        tag: &str,
+        rows: &[[T; N]],
+    ) -> std::io::Result<()> {
+        for r in rows {
+            self.w.write_all(tag.as_bytes())?;
+            for x in r {
+                write!(self.w, " {x:?}")?;
+            }
+            self.w.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+
+    /// One `f` line per face: `face_offsets[f]..face_offsets[f + 1]` indexes `face_verts`.
+    /// With `attributes`, each corner is written `i/i/i` (texture coordinate and normal of the
+    /// same index as the vertex). Offsets that decrease or run past `face_verts` give an
+    /// [`std::io::ErrorKind::InvalidInput`] error.
+    pub fn faces(
+        &mut self,
+        face_offsets: &[u32],
+        face_verts: &[u32],
+        attributes: bool,
+    ) -> std::io::Result<()> {
+        for pair in face_offsets.windows(2) {
+            let (a, b) = (pair[0] as usize, pair[1] as usize);
+            let face = face_verts.get(a..b).ok_or_else(|| {
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!(
+                        "face offsets {a}..{b} do not fit {} face-vertices",
+                        face_verts.len()
+                    ),
+                )
+            })?;
+            self.w.write_all(b"f")?;
+            for &v in face {
+                let i = u64::from(v) + 1;
+                if attributes {
+                    write!(self.w, " {i}/{i}/{i}")?;
+                } else {
+                    write!(self.w, " {i}")?;
+                }
+            }
+            self.w.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+
+    /// OpenSubdiv's tags of `m`: `t crease 2/1 a b s`, `t corner 1/1 v s`, `t hole 1/0 f`.
+    pub fn tags(&mut self, m: &ControlMesh) -> std::io::Result<()> {
+        for c in &m.creases {
+            writeln!(self.w, "t crease 2/1 {} {} {:?}", c.v0, c.v1, c.sharpness)?;
+        }
+        for c in &m.corners {
+            writeln!(self.w, "t corner 1/1 {} {:?}", c.vertex, c.sharpness)?;
+        }
+        for h in &m.holes {
+            writeln!(self.w, "t hole 1/0 {h}")?;
+        }
+        Ok(())
+    }
 }
 
 /// A token for a message: quoted, and shortened when long.

@@ -1,7 +1,7 @@
 //! Control meshes of the bundled scenes, generated in code (see `examples/make_scenes.rs`,
 //! which writes them to `scenes/`), and an OBJ writer that keeps the tags.
 
-use super::{ControlMesh, EdgeCrease, VertexCorner, SHARPNESS_INFINITE};
+use super::{ControlMesh, EdgeCrease, SHARPNESS_INFINITE};
 use std::f64::consts::PI;
 use std::io::Write;
 
@@ -274,29 +274,11 @@ pub fn cyclorama(width: f64, depth: f64, height: f64) -> ControlMesh {
 /// `t corner 1/1 v s`, `t hole 1/0 f`), positions in shortest round-trip form, `header`
 /// lines as comments first.
 pub fn write_tagged_obj(w: &mut impl Write, m: &ControlMesh, header: &str) -> std::io::Result<()> {
-    for line in header.lines() {
-        writeln!(w, "# {line}")?;
-    }
-    for p in &m.positions {
-        writeln!(w, "v {:?} {:?} {:?}", p[0], p[1], p[2])?;
-    }
-    for f in 0..m.num_faces() {
-        w.write_all(b"f")?;
-        for &v in m.face(f) {
-            write!(w, " {}", u64::from(v) + 1)?;
-        }
-        w.write_all(b"\n")?;
-    }
-    for c in &m.creases {
-        writeln!(w, "t crease 2/1 {} {} {:?}", c.v0, c.v1, c.sharpness)?;
-    }
-    for VertexCorner { vertex, sharpness } in &m.corners {
-        writeln!(w, "t corner 1/1 {vertex} {sharpness:?}")?;
-    }
-    for h in &m.holes {
-        writeln!(w, "t hole 1/0 {h}")?;
-    }
-    Ok(())
+    let mut o = super::obj::ObjWriter::new(w);
+    o.comment(header)?;
+    o.vertices("v", &m.positions)?;
+    o.faces(&m.face_offsets, &m.face_verts, false)?;
+    o.tags(m)
 }
 
 #[cfg(test)]

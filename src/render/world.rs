@@ -59,6 +59,9 @@ pub struct World {
     pub settings: RenderSettings,
     /// Build timings.
     pub stats: BuildStats,
+    /// Warnings of the build (mesh files' warnings, meshes without a surface): returned, not
+    /// printed; the command line prints them.
+    pub warnings: Vec<String>,
 }
 
 fn largest_scale(m: &Affine3A) -> f64 {
@@ -95,14 +98,12 @@ impl World {
         let controls: Vec<_> = desc
             .meshes
             .par_iter()
-            .map(|m| {
-                let mesh = read_obj(&m.file)?;
-                for w in &mesh.warnings {
-                    eprintln!("warning: {w}");
-                }
-                Ok(mesh)
-            })
+            .map(|m| read_obj(&m.file))
             .collect::<Result<Vec<_>>>()?;
+        let mut warnings: Vec<String> = controls
+            .iter()
+            .flat_map(|m| m.warnings.iter().map(|w| w.to_string()))
+            .collect();
         let environment = match &desc.environment {
             None => None,
             Some(EnvDesc::Constant(c)) => Some(Environment::Constant(*c)),
@@ -189,12 +190,12 @@ impl World {
         let mut mesh_lights = Vec::new();
         for (m, bvh) in desc.meshes.iter().zip(&bvhs) {
             if bvh.diced.triangles.is_empty() {
-                eprintln!(
-                    "warning: {}:{}: mesh {} has no surface (every face a hole?); skipped",
+                warnings.push(format!(
+                    "{}:{}: mesh {} has no surface (every face a hole?); skipped",
                     scene_name,
                     m.line,
                     m.file.display()
-                );
+                ));
                 continue;
             }
             stats.triangles += bvh.diced.triangles.len();
@@ -242,6 +243,7 @@ impl World {
             camera,
             settings,
             stats,
+            warnings,
         })
     }
 }

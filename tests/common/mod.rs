@@ -121,3 +121,34 @@ pub fn closed(mesh: &limitray::mesh::ControlMesh) -> bool {
             .all(|e| topo.edge_face_count(e as u32) == 2 && !topo.edge_nonmanifold[e])
         && topo.vert_tags.iter().all(|t| !t.nonmanifold)
 }
+
+/// The `limitray` binary as a command, ready for arguments.
+pub fn limitray_command() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_limitray"))
+}
+
+/// Runs the `limitray` binary with `args`, feeding `stdin` when given: the one way the tests run
+/// the command line.
+pub fn run_limitray<S: AsRef<std::ffi::OsStr>>(
+    args: &[S],
+    stdin: Option<&[u8]>,
+) -> std::process::Output {
+    use std::io::Write;
+    use std::process::Stdio;
+    let mut cmd = limitray_command();
+    cmd.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
+    cmd.stdin(if stdin.is_some() {
+        Stdio::piped()
+    } else {
+        Stdio::null()
+    });
+    let mut child = cmd.spawn().expect("failed to run limitray");
+    if let Some(input) = stdin {
+        let mut pipe = child.stdin.take().expect("piped stdin");
+        // The tool may exit before reading everything (bad arguments): ignore a broken pipe.
+        let _ = pipe.write_all(input);
+    }
+    child
+        .wait_with_output()
+        .expect("failed to wait for limitray")
+}

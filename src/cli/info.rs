@@ -1,7 +1,85 @@
-//! Human-readable summaries of control meshes (`limitray info`).
+//! `limitray info` (a JSON summary of a control mesh) and `limitray stats` (of its patch table).
 
+use super::args::{load, RuleArgs};
+use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, Options};
-use crate::refine::Level;
+use crate::patch::{PatchOptions, PatchTable};
+use crate::refine::{Level, Refiner};
+use std::path::PathBuf;
+
+/// Arguments of `limitray info`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct InfoCmd {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub rules: RuleArgs,
+}
+
+/// Runs `limitray info`.
+pub fn run_info(args: &InfoCmd) -> Result<()> {
+    let m = load(&args.mesh)?;
+    let opts = args.rules.options(&m);
+    let r = Refiner::with_options(&m, opts, 0)?;
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!(
+        "{}",
+        summary(&args.mesh.display().to_string(), &m, &r.levels[0], &opts)
+    );
+    Ok(())
+}
+
+/// Arguments of `limitray stats`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct StatsCmd {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    /// Maximum isolation level.
+    #[arg(long, default_value_t = crate::patch::table::DEFAULT_MAX_LEVEL)]
+    pub max_level: usize,
+    /// Isolate semi-sharp creases by subdivision only (no single-crease patches).
+    #[arg(long)]
+    pub no_single_crease: bool,
+    /// Override every crease's sharpness.
+    #[arg(long)]
+    pub sharpness: Option<f32>,
+}
+
+/// Runs `limitray stats`.
+pub fn run_stats(args: &StatsCmd) -> Result<()> {
+    let mut m = load(&args.mesh)?;
+    if let Some(s) = args.sharpness {
+        if s.is_nan() || s < 0.0 {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("--sharpness {s} must be ≥ 0"),
+            ));
+        }
+        for c in &mut m.creases {
+            c.sharpness = s;
+        }
+    }
+    let opts = args.rules.options(&m);
+    let t0 = std::time::Instant::now();
+    let table = PatchTable::with_options(
+        &m,
+        opts,
+        PatchOptions {
+            max_level: args.max_level,
+            single_crease: !args.no_single_crease,
+        },
+    )?;
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    println!(
+        "{}",
+        patch_stats(&args.mesh.display().to_string(), &table, ms)
+    );
+    Ok(())
+}
 
 /// A JSON summary of a control mesh and its level-0 analysis.
 pub fn summary(name: &str, mesh: &ControlMesh, level: &Level, options: &Options) -> String {
@@ -48,7 +126,7 @@ pub fn summary(name: &str, mesh: &ControlMesh, level: &Level, options: &Options)
 }
 
 /// A JSON summary of a patch table (`limitray stats`).
-pub fn patch_stats(name: &str, table: &crate::patch::PatchTable, build_ms: f64) -> String {
+pub fn patch_stats(name: &str, table: &PatchTable, build_ms: f64) -> String {
     let mut by_kind = serde_json::Map::new();
     let mut by_level = serde_json::Map::new();
     let mut detail = serde_json::Map::new();

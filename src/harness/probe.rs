@@ -2,7 +2,7 @@
 //! number, random and aimed directions, and the accuracy of hits against the exact limit
 //! surface. Used by the leak and accuracy tests, the benchmarks and `limitray accuracy`.
 
-use crate::bench::SplitMix64;
+use super::rng::SplitMix64;
 use crate::bvh::exact::refine_hit;
 use crate::bvh::{MeshBvh, Ray};
 use crate::coord::FaceCoord;

@@ -93,13 +93,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderReport> {
     if args.spp == Some(0) {
         return Err(Error::new(ErrorKind::Usage, "--spp must be at least 1"));
     }
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if args.threads > 0 {
-        builder = builder.num_threads(args.threads);
-    }
-    let pool = builder
-        .build()
-        .map_err(|e| Error::new(ErrorKind::Usage, format!("thread pool: {e}")))?;
+    let pool = crate::harness::pool(args.threads)?;
     pool.install(|| render_in_pool(args))
 }
 
@@ -136,6 +130,9 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
         settings.seed = s;
     }
     let world = World::build(&desc, settings)?;
+    for w in &world.warnings {
+        eprintln!("warning: {w}");
+    }
     let st = world.stats;
     if !args.quiet {
         eprintln!(
@@ -164,10 +161,12 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
         b
     };
     // GPU set-up (device, upload, kernel compilation) is not part of the render time.
+    #[cfg(feature = "gpu")]
     let gpu_ctx = match args.backend {
         Backend::Cpu => None,
         Backend::Gpu => Some(crate::gpu::GpuContext::new(args.adapter.as_deref())?),
     };
+    #[cfg(feature = "gpu")]
     let gpu = match &gpu_ctx {
         None => None,
         Some(ctx) => {
@@ -183,19 +182,30 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
             Some(g)
         }
     };
+    #[cfg(not(feature = "gpu"))]
+    if args.backend == Backend::Gpu {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "this limitray was built without the `gpu` feature",
+        ));
+    }
+    let progress = |n: usize| {
+        if bar.length().is_none() {
+            bar.set_length(n as u64);
+        }
+        bar.inc(1);
+    };
     let t0 = Instant::now();
+    #[cfg(feature = "gpu")]
     let film = match &gpu {
-        None => world.render(&|n| {
-            if bar.length().is_none() {
-                bar.set_length(n as u64);
-            }
-            bar.inc(1);
-        }),
+        None => world.render(&progress),
         Some(g) => {
             bar.set_length(1000);
             g.render(&world, &|x| bar.set_position((x * 1000.0) as u64))?
         }
     };
+    #[cfg(not(feature = "gpu"))]
+    let film = world.render(&progress);
     let render_s = t0.elapsed().as_secs_f64();
     bar.finish_and_clear();
     crate::render::output::write_film(&args.output, &film)?;
@@ -224,4 +234,9 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
         );
     }
     Ok(report)
+}
+
+/// Runs `limitray render`, discarding the report.
+pub fn run_cmd(args: &RenderArgs) -> Result<()> {
+    run(args).map(|_| ())
 }

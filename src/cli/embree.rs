@@ -1,20 +1,15 @@
-//! The `crosscheck` and `bench` subcommands (feature `embree`).
+//! `limitray crosscheck` and `limitray bench` (feature `embree`).
 
-use super::bench::{bench, BenchOptions};
-use super::crosscheck::{crosscheck, EDGE_TOLERANCE, T_TOLERANCE};
+use super::args::MeshSource;
+use crate::embree::bench::{bench, BenchOptions};
+use crate::embree::crosscheck::{crosscheck, EDGE_TOLERANCE, T_TOLERANCE};
 use crate::error::{Error, ErrorKind, Result};
-use crate::mesh::{generate, obj::read_obj, ControlMesh};
-use std::path::PathBuf;
 
 /// Arguments of `limitray crosscheck`.
 #[derive(clap::Args, Debug)]
 pub struct CrosscheckArgs {
-    /// OBJ file with OpenSubdiv tags (or use --grid).
-    #[arg(required_unless_present = "grid", conflicts_with = "grid")]
-    pub mesh: Option<PathBuf>,
-    /// Use the generated N x N grid instead of an OBJ file.
-    #[arg(long, value_name = "N")]
-    pub grid: Option<usize>,
+    #[command(flatten)]
+    pub source: MeshSource,
     /// Uniform rate: limitray's dicing rate and Embree's tessellation rate.
     #[arg(long, default_value_t = 16, value_name = "R")]
     pub rate: u32,
@@ -32,12 +27,8 @@ pub struct CrosscheckArgs {
 /// Arguments of `limitray bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// OBJ file with OpenSubdiv tags (or use --grid).
-    #[arg(required_unless_present = "grid", conflicts_with = "grid")]
-    pub mesh: Option<PathBuf>,
-    /// Use the generated N x N grid (`limitray::mesh::generate::grid`) instead of an OBJ file.
-    #[arg(long, value_name = "N")]
-    pub grid: Option<usize>,
+    #[command(flatten)]
+    pub source: MeshSource,
     /// Uniform rate: limitray's dicing rate and Embree's tessellation rate.
     #[arg(long, default_value_t = 16, value_name = "R")]
     pub rate: u32,
@@ -61,34 +52,12 @@ pub struct BenchArgs {
     pub json: bool,
 }
 
-fn load(mesh: &Option<PathBuf>, grid: Option<usize>) -> Result<(String, ControlMesh)> {
-    match (mesh, grid) {
-        (Some(path), None) => {
-            let m = read_obj(path)?;
-            for w in &m.warnings {
-                eprintln!("warning: {w}");
-            }
-            Ok((path.display().to_string(), m))
-        }
-        (None, Some(n)) => {
-            if n == 0 {
-                return Err(Error::new(ErrorKind::Usage, "--grid must be at least 1"));
-            }
-            Ok((format!("grid {n}"), generate::grid(n)))
-        }
-        _ => Err(Error::new(
-            ErrorKind::Usage,
-            "give either a mesh file or --grid N",
-        )),
-    }
-}
-
 /// Runs `limitray crosscheck`: prints the agreement figures (text, or JSON with `--json`).
 pub fn run_crosscheck(args: &CrosscheckArgs) -> Result<()> {
     if args.rays == 0 {
         return Err(Error::new(ErrorKind::Usage, "--rays must be at least 1"));
     }
-    let (name, mesh) = load(&args.mesh, args.grid)?;
+    let (name, mesh) = args.source.load()?;
     let r = crosscheck(&mesh, args.rate, args.rays, args.seed)?;
     if args.json {
         let mut v = r.json();
@@ -153,7 +122,7 @@ pub fn run_crosscheck(args: &CrosscheckArgs) -> Result<()> {
 
 /// Runs `limitray bench`: prints the side-by-side table (or JSON with `--json`).
 pub fn run_bench(args: &BenchArgs) -> Result<()> {
-    let (name, mesh) = load(&args.mesh, args.grid)?;
+    let (name, mesh) = args.source.load()?;
     let opts = BenchOptions {
         rate: args.rate,
         rays: args.rays,

@@ -1,9 +1,37 @@
 //! The line-oriented `limitray eval` tool: `face u v` or `face k u v` in, nine numbers out.
 
+use super::args::{load, RuleArgs};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
-use crate::patch::PatchTable;
+use crate::patch::{PatchOptions, PatchTable};
 use std::io::{BufRead, Write};
+use std::path::PathBuf;
+
+/// Arguments of `limitray eval`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct EvalCmd {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    /// Maximum isolation level of the patch table.
+    #[arg(long, default_value_t = crate::patch::table::DEFAULT_MAX_LEVEL)]
+    pub max_level: usize,
+}
+
+/// Runs `limitray eval` on standard input and output.
+pub fn run_cmd(args: &EvalCmd) -> Result<()> {
+    let m = load(&args.mesh)?;
+    let table = PatchTable::with_options(
+        &m,
+        args.rules.options(&m),
+        PatchOptions {
+            max_level: args.max_level,
+            ..PatchOptions::default()
+        },
+    )?;
+    run(&table, std::io::stdin().lock(), std::io::stdout().lock())
+}
 
 fn parse_sample(line: &str) -> std::result::Result<FaceCoord, String> {
     let toks: Vec<&str> = line.split_whitespace().collect();

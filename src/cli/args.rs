@@ -1,0 +1,175 @@
+//! Argument groups shared by several subcommands: the mesh (a file or a generated grid), the
+//! subdivision rules, the dicing options, the worker threads and the output path.
+
+use crate::dice::{DiceOptions, DiceRate};
+use crate::error::{Error, ErrorKind, Result};
+use crate::mesh::obj::read_obj;
+use crate::mesh::{generate, BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use std::path::{Path, PathBuf};
+
+/// Boundary interpolation on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Boundary {
+    /// No boundary interpolation (boundary faces become holes).
+    None,
+    /// Boundary edges sharp, corners of one face smooth.
+    Edge,
+    /// Boundary edges sharp, corners of one face sharp.
+    Corner,
+}
+
+impl From<Boundary> for BoundaryInterpolation {
+    fn from(b: Boundary) -> Self {
+        match b {
+            Boundary::None => BoundaryInterpolation::None,
+            Boundary::Edge => BoundaryInterpolation::EdgeOnly,
+            Boundary::Corner => BoundaryInterpolation::EdgeAndCorner,
+        }
+    }
+}
+
+/// Rule overrides: `--chaikin`, `--boundary`.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct RuleArgs {
+    /// Use Chaikin's crease rule instead of the uniform one.
+    #[arg(long)]
+    pub chaikin: bool,
+    /// Boundary interpolation (default: the mesh's tag, else corner = edge-and-corner).
+    #[arg(long, value_enum)]
+    pub boundary: Option<Boundary>,
+}
+
+impl RuleArgs {
+    /// The mesh's options with these overrides applied.
+    pub fn options(&self, mesh: &ControlMesh) -> Options {
+        let mut o = mesh.options;
+        if self.chaikin {
+            o.crease_method = CreaseMethod::Chaikin;
+        }
+        if let Some(b) = self.boundary {
+            o.boundary = b.into();
+        }
+        o
+    }
+}
+
+/// Reads an OBJ control mesh and prints its warnings on stderr.
+pub fn load(path: &Path) -> Result<ControlMesh> {
+    let mesh = read_obj(path)?;
+    for w in &mesh.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(mesh)
+}
+
+/// A mesh file or `--grid N` (the benchmarks' generated N × N grid).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct MeshSource {
+    /// OBJ file with OpenSubdiv tags (or use --grid).
+    #[arg(required_unless_present = "grid", conflicts_with = "grid")]
+    pub mesh: Option<PathBuf>,
+    /// Use the generated N x N grid (`limitray::mesh::generate::grid`) instead of an OBJ file.
+    #[arg(long, value_name = "N")]
+    pub grid: Option<usize>,
+}
+
+impl MeshSource {
+    /// The mesh and its display name (`grid N` for a generated grid).
+    pub fn load(&self) -> Result<(String, ControlMesh)> {
+        match (&self.mesh, self.grid) {
+            (Some(path), None) => Ok((path.display().to_string(), load(path)?)),
+            (None, Some(n)) => {
+                if n == 0 {
+                    return Err(Error::new(ErrorKind::Usage, "--grid must be at least 1"));
+                }
+                Ok((format!("grid {n}"), generate::grid(n)))
+            }
+            _ => Err(Error::new(
+                ErrorKind::Usage,
+                "give either a mesh file or --grid N",
+            )),
+        }
+    }
+}
+
+/// Dicing options of the command line.
+#[derive(clap::Args, Clone, Debug)]
+pub struct DiceArgs {
+    /// Uniform rate: segments per base-face edge (halved on n-gon sub-faces).
+    #[arg(long, default_value_t = 4)]
+    pub rate: u32,
+    /// Dice by object-space micro-edge length instead of a uniform rate.
+    #[arg(long)]
+    pub edge_length: Option<f64>,
+    /// Largest number of segments on one edge.
+    #[arg(long, default_value_t = 256)]
+    pub max_rate: u32,
+    /// Maximum isolation level of the patch table.
+    #[arg(long, default_value_t = crate::patch::table::DEFAULT_MAX_LEVEL)]
+    pub max_level: usize,
+}
+
+impl Default for DiceArgs {
+    fn default() -> Self {
+        DiceArgs {
+            rate: 4,
+            edge_length: None,
+            max_rate: 256,
+            max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
+        }
+    }
+}
+
+impl DiceArgs {
+    /// The dicing options these arguments ask for.
+    pub fn options(&self) -> DiceOptions {
+        DiceOptions {
+            rate: match self.edge_length {
+                Some(l) => DiceRate::EdgeLength(l),
+                None => DiceRate::Uniform(self.rate),
+            },
+            max_rate: self.max_rate,
+        }
+    }
+}
+
+/// `--threads T` (0: every core).
+#[derive(clap::Args, Clone, Copy, Debug, Default)]
+pub struct ThreadArgs {
+    /// Worker threads (0: all available).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+}
+
+impl ThreadArgs {
+    /// The number of threads asked for, 0 resolved to the machine's parallelism.
+    pub fn count(&self) -> usize {
+        crate::harness::thread_count(self.threads)
+    }
+
+    /// A rayon pool of [`Self::count`] threads.
+    pub fn pool(&self) -> Result<rayon::ThreadPool> {
+        crate::harness::pool(self.threads)
+    }
+}
+
+/// Writes through `write` to `path`, or to standard output when `path` is `-`.
+pub fn write_output(
+    path: &Path,
+    write: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<()> {
+    let io_err = |e: std::io::Error| {
+        Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string())
+    };
+    if path.as_os_str() == "-" {
+        let stdout = std::io::stdout();
+        let mut w = std::io::BufWriter::new(stdout.lock());
+        write(&mut w).map_err(io_err)?;
+        std::io::Write::flush(&mut w).map_err(io_err)
+    } else {
+        let f = std::fs::File::create(path).map_err(io_err)?;
+        let mut w = std::io::BufWriter::new(f);
+        write(&mut w).map_err(io_err)?;
+        std::io::Write::flush(&mut w).map_err(io_err)
+    }
+}

@@ -1,0 +1,139 @@
+//! `limitray bench-eval`: exact limit evaluation through a [`PatchTable`] — the table build
+//! once, then batches of random `(face, k, u, v)` queries ([`eval_queries`]) evaluated in
+//! parallel ([`eval_batch`]).
+
+use super::args::{MeshSource, ThreadArgs};
+use super::bench_refine::{median, ms_since, round4};
+use crate::error::{Error, ErrorKind, Result};
+use crate::harness::eval::{eval_batch, eval_queries};
+use crate::mesh::ControlMesh;
+use crate::patch::{PatchOptions, PatchTable};
+use std::time::Instant;
+
+/// Repetitions of the evaluation batch; the median is reported.
+pub const EVAL_REPS: usize = 5;
+
+/// Arguments of `limitray bench-eval`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct BenchEvalArgs {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: std::path::PathBuf,
+    /// Random samples per repetition.
+    #[arg(long, default_value_t = 100_000)]
+    pub samples: usize,
+    #[command(flatten)]
+    pub threads: ThreadArgs,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Runs `limitray bench-eval`: one JSON line on stdout.
+pub fn run(args: &BenchEvalArgs) -> Result<()> {
+    let (_, m) = MeshSource {
+        mesh: Some(args.mesh.clone()),
+        grid: None,
+    }
+    .load()?;
+    let v = eval_bench(&m, args.samples, args.threads.count(), args.seed)?;
+    println!("{v}");
+    Ok(())
+}
+
+/// Sum of all coordinates: a checksum that keeps evaluated positions observable.
+fn checksum(points: &[[f64; 3]]) -> f64 {
+    points.iter().map(|p| p[0] + p[1] + p[2]).sum()
+}
+
+/// Benchmarks exact limit evaluation on `mesh`.
+///
+/// Builds the feature-adaptive [`PatchTable`] (default maximum level, single-crease patches;
+/// timed once, in the calling thread), draws `samples` queries with [`eval_queries`] (seeded
+/// by `seed`), then evaluates them [`EVAL_REPS`] times with [`eval_batch`] in a rayon pool of
+/// `threads` threads. Returns a JSON object with `build_ms`, `eval_ms` (median batch time),
+/// `evals_per_s` (`samples` / median batch time), `samples`, `threads`, `reps`, `seed`,
+/// `patches`, `bytes` (table memory) and `checksum` (sum of all coordinates of the evaluated
+/// positions, identical for every repetition and thread count).
+pub fn eval_bench(
+    mesh: &ControlMesh,
+    samples: usize,
+    threads: usize,
+    seed: u64,
+) -> Result<serde_json::Value> {
+    let usage = |m: String| Error::new(ErrorKind::Usage, m);
+    if samples == 0 {
+        return Err(usage("samples must be at least 1".into()));
+    }
+    if threads == 0 {
+        return Err(usage("threads must be at least 1".into()));
+    }
+    let t0 = Instant::now();
+    let table = PatchTable::new(
+        mesh,
+        PatchOptions {
+            max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
+            single_crease: true,
+        },
+    )?;
+    let build_ms = ms_since(t0);
+    let queries = eval_queries(&table, samples, seed)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| usage(format!("cannot start thread pool: {e}")))?;
+
+    let mut times = Vec::with_capacity(EVAL_REPS);
+    let mut sum = None;
+    for _ in 0..EVAL_REPS {
+        let t0 = Instant::now();
+        let points = pool.install(|| eval_batch(&table, &queries))?;
+        times.push(ms_since(t0));
+        let c = std::hint::black_box(checksum(&points));
+        debug_assert!(sum.is_none_or(|s: f64| s.to_bits() == c.to_bits()));
+        sum = Some(c);
+    }
+    let eval_ms = median(&mut times);
+    Ok(serde_json::json!({
+        "build_ms": round4(build_ms),
+        "eval_ms": round4(eval_ms),
+        "evals_per_s": if eval_ms > 0.0 {
+            (samples as f64 / (eval_ms * 1e-3)).round()
+        } else {
+            0.0
+        },
+        "samples": samples,
+        "threads": threads,
+        "reps": EVAL_REPS,
+        "seed": seed,
+        "patches": table.patches.len(),
+        "bytes": table.bytes(),
+        "checksum": sum.unwrap_or(0.0),
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn eval_bench_grid() {
+        let mesh = generate::grid(4);
+        let v = eval_bench(&mesh, 1000, 2, 7).unwrap();
+        assert_eq!(v["samples"], 1000);
+        assert_eq!(v["threads"], 2);
+        assert_eq!(v["reps"], EVAL_REPS);
+        assert!(v["patches"].as_u64().unwrap() >= 16);
+        assert!(v["bytes"].as_u64().unwrap() > 0);
+        assert!(v["build_ms"].as_f64().unwrap() >= 0.0);
+        assert!(v["evals_per_s"].as_f64().unwrap() > 0.0);
+        // The grid's limit surface lies within the control hull: x, y in [0, 4], |z| <= 0.1.
+        let c = v["checksum"].as_f64().unwrap();
+        assert!(c.is_finite() && c > 0.0 && c < 1000.0 * 8.2);
+        // Same seed, other thread count: same queries, same positions, same checksum.
+        let w = eval_bench(&mesh, 1000, 1, 7).unwrap();
+        assert_eq!(v["checksum"], w["checksum"]);
+        assert!(eval_bench(&mesh, 0, 1, 7).is_err());
+        assert!(eval_bench(&mesh, 10, 0, 7).is_err());
+    }
+}

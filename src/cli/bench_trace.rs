@@ -1,0 +1,116 @@
+//! `limitray bench-trace`: patch table, dicing and BVH build times, and ray queries per second.
+
+use super::args::{MeshSource, ThreadArgs};
+use crate::bvh::MeshBvh;
+use crate::dice::{dice, DiceOptions, DiceRate};
+use crate::error::Result;
+use crate::harness::rays::{camera_rays, random_rays};
+use crate::patch::{PatchOptions, PatchTable};
+use rayon::prelude::*;
+
+/// Options of `limitray bench-trace`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct TraceBenchArgs {
+    #[command(flatten)]
+    pub source: MeshSource,
+    /// Uniform dicing rate.
+    #[arg(long, default_value_t = 4)]
+    pub rate: u32,
+    /// Rays per measurement (coherent and incoherent each).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: usize,
+    #[command(flatten)]
+    pub threads: ThreadArgs,
+    /// Repetitions; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    pub reps: usize,
+}
+
+/// Median of wall-clock seconds of `reps` runs of `f`.
+fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut times: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let t = std::time::Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// Rounds to `digits` decimals for the JSON report.
+fn round(x: f64, digits: i32) -> f64 {
+    let s = 10f64.powi(digits);
+    (x * s).round() / s
+}
+
+/// Runs `limitray bench-trace`: dicing, BVH build, and closest-hit rays/s, as one JSON line.
+pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
+    let (_, mesh) = args.source.load()?;
+    let threads = args.threads.count();
+    args.threads.pool()?.install(|| {
+        let t0 = std::time::Instant::now();
+        let table = PatchTable::new(&mesh, PatchOptions::default())?;
+        let t1 = std::time::Instant::now();
+        let d = dice(
+            &table,
+            &mesh,
+            &DiceOptions {
+                rate: DiceRate::Uniform(args.rate),
+                max_rate: 1024,
+            },
+        )?;
+        let t2 = std::time::Instant::now();
+        let tris = d.triangles.len();
+        let bvh = MeshBvh::build(d);
+        let t3 = std::time::Instant::now();
+        let bounds = bvh.bounds();
+        let ms =
+            |a: std::time::Instant, b: std::time::Instant| round((b - a).as_secs_f64() * 1e3, 1);
+        let mut out = serde_json::json!({
+            "triangles": tris,
+            "threads": threads,
+            "table_ms": ms(t0, t1),
+            "dice_ms": ms(t1, t2),
+            "bvh_ms": ms(t2, t3),
+            "bvh_nodes": bvh.cwbvh.nodes.len(),
+            "widened_planes": bvh.widened_planes,
+            "bytes_per_triangle": round(bvh.bytes() as f64 / tris.max(1) as f64, 1),
+        });
+        let sets = [
+            ("coherent", camera_rays(bounds, args.rays)),
+            ("incoherent", random_rays(bounds, args.rays, 11)),
+        ];
+        for (name, rays) in &sets {
+            let mut hits = 0;
+            let med = median_secs(args.reps, || {
+                hits = bvh
+                    .intersect_batch(rays)
+                    .iter()
+                    .filter(|x| x.is_some())
+                    .count();
+            });
+            out[format!("{name}_mrays_per_s")] = round(rays.len() as f64 / med / 1e6, 3).into();
+            out[format!("{name}_hits")] = hits.into();
+        }
+        // Any-hit (shadow) queries on the incoherent rays.
+        let rays = &sets[1].1;
+        let med = median_secs(args.reps, || {
+            let n = rays
+                .par_iter()
+                .with_min_len(256)
+                .filter(|r| bvh.occluded(r))
+                .count();
+            std::hint::black_box(n);
+        });
+        out["incoherent_anyhit_mrays_per_s"] = round(rays.len() as f64 / med / 1e6, 3).into();
+        Ok(out)
+    })
+}
+
+/// Runs `limitray bench-trace`: one JSON line on stdout.
+pub fn run(args: &TraceBenchArgs) -> Result<()> {
+    println!("{}", trace_bench(args)?);
+    Ok(())
+}

@@ -1,0 +1,66 @@
+//! `limitray dice`: the diced limit surface as OBJ.
+
+use super::args::{load, write_output, DiceArgs, RuleArgs};
+use crate::dice::{dice, DicedMesh};
+use crate::error::Result;
+use crate::mesh::obj::ObjWriter;
+use crate::mesh::ControlMesh;
+use crate::patch::{PatchOptions, PatchTable};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// Arguments of `limitray dice`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct DiceCmd {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    #[command(flatten)]
+    pub dice: DiceArgs,
+    /// Output OBJ file ('-' for standard output).
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+}
+
+/// Runs `limitray dice`.
+pub fn run(args: &DiceCmd) -> Result<()> {
+    let m = load(&args.mesh)?;
+    let (_, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
+    write_output(&args.output, |w| write_diced(w, &d))
+}
+
+/// Builds the patch table and dices `mesh` under `options`.
+pub fn dice_mesh(
+    mesh: &ControlMesh,
+    options: crate::mesh::Options,
+    args: &DiceArgs,
+) -> Result<(PatchTable, DicedMesh)> {
+    let table = PatchTable::with_options(
+        mesh,
+        options,
+        PatchOptions {
+            max_level: args.max_level,
+            ..PatchOptions::default()
+        },
+    )?;
+    let d = dice(&table, mesh, &args.options())?;
+    Ok((table, d))
+}
+
+/// Writes a diced mesh as OBJ: `v`, `vn`, `vt` (the vertex's `(u, v)` in its face, at the f32
+/// precision of the diced vertices), and `f` with 1-based `v/vt/vn` indices.
+pub fn write_diced<W: Write + ?Sized>(w: &mut W, d: &DicedMesh) -> std::io::Result<()> {
+    let mut o = ObjWriter::new(w);
+    o.comment(&format!(
+        "limitray diced limit surface: {} vertices, {} triangles",
+        d.positions.len(),
+        d.triangles.len()
+    ))?;
+    o.vertices("v", &d.positions)?;
+    o.vertices("vn", &d.normals)?;
+    let uv: Vec<[f32; 2]> = d.params.iter().map(|p| [p.u as f32, p.v as f32]).collect();
+    o.vertices("vt", &uv)?;
+    let offsets: Vec<u32> = (0..=d.triangles.len() as u32).map(|i| 3 * i).collect();
+    o.faces(&offsets, d.triangles.as_flattened(), true)
+}

@@ -1,0 +1,51 @@
+//! `limitray refine`: uniform refinement to level N, written as OBJ.
+
+use super::args::{load, write_output, RuleArgs};
+use crate::error::Result;
+use crate::mesh::obj::write_obj;
+use crate::refine::Refiner;
+use std::path::PathBuf;
+
+/// Arguments of `limitray refine`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RefineCmd {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: PathBuf,
+    /// Number of refinement steps.
+    #[arg(long, default_value_t = 1)]
+    pub level: usize,
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    /// Output OBJ file ('-' for standard output).
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+    /// Write the exact limit positions of the level's vertices instead of the level's
+    /// control points.
+    #[arg(long)]
+    pub limit: bool,
+}
+
+/// Runs `limitray refine`.
+pub fn run(args: &RefineCmd) -> Result<()> {
+    let m = load(&args.mesh)?;
+    let opts = args.rules.options(&m);
+    let level = args.level;
+    let r = Refiner::with_options(&m, opts, level)?;
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut pos = r.refine_positions(&m.positions, level);
+    let lvl = &r.levels[level];
+    if args.limit {
+        pos = crate::refine::limit::limit_positions(lvl, &pos, opts.crease_method);
+    }
+    let mut offsets = vec![0u32];
+    let mut verts = Vec::new();
+    for f in 0..lvl.num_faces() {
+        if !lvl.face_hole[f] {
+            verts.extend_from_slice(lvl.topo.face_vertices(f));
+            offsets.push(verts.len() as u32);
+        }
+    }
+    write_output(&args.output, |w| write_obj(w, &pos, &offsets, &verts))
+}

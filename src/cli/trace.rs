@@ -1,0 +1,175 @@
+//! `limitray trace`: line-oriented ray queries (`ox oy oz dx dy dz` in, `hit t face k u v nx ny
+//! nz` or `miss` out) on the CPU or, with `--backend gpu`, on a Vulkan adapter.
+
+use super::args::{load, DiceArgs, RuleArgs};
+use super::dice::dice_mesh;
+use crate::bvh::exact::refine_hit;
+use crate::bvh::{MeshBvh, Ray};
+use crate::error::{Error, ErrorKind, Result};
+use crate::patch::PatchTable;
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+
+/// Where rays are traced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// The CPU (rayon).
+    #[default]
+    Cpu,
+    /// A Vulkan adapter through wgpu (lavapipe on machines without a GPU).
+    Gpu,
+}
+
+/// Backend options of the command line.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct BackendArgs {
+    /// Trace on the CPU or on a Vulkan adapter (wgpu compute).
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+    /// GPU adapter: a case-insensitive substring of its name (default: $LIMITRAY_ADAPTER,
+    /// else a real GPU before a CPU implementation). `limitray gpu-info` lists them.
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+/// Arguments of `limitray trace`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct TraceCmd {
+    /// OBJ file with OpenSubdiv tags.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    #[command(flatten)]
+    pub dice: DiceArgs,
+    /// Refine each hit onto the exact limit surface (Newton, f64).
+    #[arg(long)]
+    pub exact: bool,
+    #[command(flatten)]
+    pub backend: BackendArgs,
+}
+
+/// Runs `limitray trace` on standard input and output.
+pub fn run(args: &TraceCmd) -> Result<()> {
+    let m = load(&args.mesh)?;
+    let (table, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
+    let bvh = MeshBvh::build(d);
+    let (input, output) = (std::io::stdin().lock(), std::io::stdout().lock());
+    match args.backend.backend {
+        Backend::Cpu => trace(&bvh, &table, args.exact, input, output),
+        #[cfg(feature = "gpu")]
+        Backend::Gpu => {
+            let ctx = crate::gpu::GpuContext::new(args.backend.adapter.as_deref())?;
+            trace_with(&table, args.exact, input, output, |rays| {
+                crate::gpu::trace_mesh(&ctx, &bvh, rays, crate::gpu::TraceOptions::default())
+            })
+        }
+        #[cfg(not(feature = "gpu"))]
+        Backend::Gpu => Err(Error::new(
+            ErrorKind::Usage,
+            "this limitray was built without the `gpu` feature",
+        )),
+    }
+}
+
+fn parse_ray(line: &str) -> std::result::Result<Ray, String> {
+    let toks: Vec<&str> = line.split_whitespace().collect();
+    if toks.len() != 6 {
+        return Err(format!(
+            "expected 'ox oy oz dx dy dz', found {} fields",
+            toks.len()
+        ));
+    }
+    let mut x = [0f32; 6];
+    for (i, t) in toks.iter().enumerate() {
+        x[i] = t
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("invalid number '{t}'"))?;
+    }
+    if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
+        return Err("ray direction is zero".into());
+    }
+    Ok(Ray::new([x[0], x[1], x[2]], [x[3], x[4], x[5]]))
+}
+
+/// Reads rays from `input` and writes one line per input line: `hit t face k u v nx ny nz`
+/// (the normal is the limit-surface shading normal), `miss`, or nine `nan` fields for a bad
+/// line (with `stdin:LINE: …` on stderr and an error at the end). With `exact`, each hit is
+/// refined onto the exact limit surface (`f64`, Newton) and that is printed instead; a hit that
+/// cannot be refined prints the diced hit.
+pub fn trace(
+    bvh: &MeshBvh,
+    table: &PatchTable,
+    exact: bool,
+    input: impl BufRead,
+    output: impl Write,
+) -> Result<()> {
+    trace_with(table, exact, input, output, |rays| {
+        Ok(bvh.intersect_batch(rays))
+    })
+}
+
+/// [`trace`] with the closest hits of the parsed rays computed by `hits` (one result per ray,
+/// in order): the GPU backend plugs in here.
+pub fn trace_with(
+    table: &PatchTable,
+    exact: bool,
+    input: impl BufRead,
+    mut output: impl Write,
+    hits: impl FnOnce(&[Ray]) -> Result<Vec<Option<crate::bvh::Hit>>>,
+) -> Result<()> {
+    let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
+    let mut lines = Vec::new();
+    for line in input.lines() {
+        lines.push(line.map_err(io)?);
+    }
+    let parsed: Vec<Option<std::result::Result<Ray, String>>> = lines
+        .iter()
+        .map(|l| (!l.trim().is_empty()).then(|| parse_ray(l)))
+        .collect();
+    let rays: Vec<Ray> = parsed
+        .iter()
+        .filter_map(|p| p.as_ref().and_then(|r| r.as_ref().ok()).copied())
+        .collect();
+    let hits = hits(&rays)?;
+    let mut next = hits.into_iter().zip(rays.iter());
+    let mut bad = 0;
+    for (i, p) in parsed.iter().enumerate() {
+        match p {
+            None => writeln!(output).map_err(io)?,
+            Some(Err(m)) => {
+                bad += 1;
+                eprintln!("stdin:{}: {m}", i + 1);
+                writeln!(output, "nan nan nan nan nan nan nan nan nan").map_err(io)?;
+            }
+            Some(Ok(_)) => {
+                let (h, ray) = next.next().expect("one result per ray");
+                match h {
+                    None => writeln!(output, "miss").map_err(io)?,
+                    Some(h) => match exact.then(|| refine_hit(table, ray, &h)).flatten() {
+                        Some(x) => writeln!(
+                            output,
+                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
+                            x.t, x.face, x.k, x.u, x.v, x.n[0], x.n[1], x.n[2]
+                        )
+                        .map_err(io)?,
+                        None => writeln!(
+                            output,
+                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
+                            h.t, h.face, h.k, h.u, h.v, h.ns[0], h.ns[1], h.ns[2]
+                        )
+                        .map_err(io)?,
+                    },
+                }
+            }
+        }
+    }
+    output.flush().map_err(io)?;
+    if bad > 0 {
+        return Err(
+            Error::new(ErrorKind::Parse, format!("{bad} invalid ray line(s)")).in_file("stdin"),
+        );
+    }
+    Ok(())
+}

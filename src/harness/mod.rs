@@ -1,0 +1,28 @@
+//! The test and benchmark harness: the one random generator ([`rng`]), ray generators for
+//! benchmarks and tests ([`rays`]), probes of diced surfaces (inside points, leak counts,
+//! accuracy against the exact surface: [`probe`]), evaluation queries ([`eval`]) and the
+//! worker pool every command and benchmark runs in.
+
+pub mod eval;
+pub mod probe;
+pub mod rays;
+pub mod rng;
+
+use crate::error::{Error, ErrorKind, Result};
+
+/// `threads`, or the machine's available parallelism when `threads` is 0.
+pub fn thread_count(threads: usize) -> usize {
+    if threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        threads
+    }
+}
+
+/// A rayon pool of [`thread_count`]`(threads)` worker threads.
+pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(thread_count(threads))
+        .build()
+        .map_err(|e| Error::new(ErrorKind::Usage, format!("cannot start thread pool: {e}")))
+}

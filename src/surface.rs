@@ -1,0 +1,207 @@
+//! The front end: a [`Surface`] is a control mesh with its subdivision rules and its exact
+//! limit surface, ready to evaluate, dice and trace. It threads the pipeline's stages
+//! (mesh → patch table → dicing → BVH) together so that a user never has to.
+//!
+//! ```
+//! use limitray::{FaceCoord, Ray, Surface, SurfaceOptions};
+//! use limitray::dice::{DiceOptions, DiceRate};
+//!
+//! // A cube (vertex i at the corners of [-1, 1]^3), counter-clockwise faces seen from outside.
+//! let p: Vec<[f64; 3]> = (0..8)
+//!     .map(|i| [(i & 1) as f64 * 2.0 - 1.0, ((i >> 1) & 1) as f64 * 2.0 - 1.0, ((i >> 2) & 1) as f64 * 2.0 - 1.0])
+//!     .collect();
+//! let faces = [0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4, 2, 6, 7, 3, 0, 4, 6, 2, 1, 3, 7, 5];
+//! let mesh = limitray::mesh::MeshBuilder::new().positions(p).faces(&[4; 6], &faces).build()?;
+//! let surface = Surface::new(mesh, SurfaceOptions::default())?;
+//!
+//! // The exact limit surface at the centre of face 0 (z = -1): after one Catmull-Clark step the
+//! // face point (z = -1) is a regular vertex with edge neighbours at z = -3/4 and diagonal
+//! // neighbours (the corners' vertex points) at z = -5/9; the limit mask (16 v + 4 Σ e + Σ d) / 36
+//! // gives z = -68/81, on the axis.
+//! let s = surface.eval(FaceCoord::quad(0, 0.5, 0.5)).expect("face 0 has a surface");
+//! assert!((s.p[2] + 68.0 / 81.0).abs() < 1e-12 && s.p[0].abs() < 1e-12 && s.p[1].abs() < 1e-12);
+//!
+//! // Dice it into crack-free triangles and trace a ray from the centre: it always hits.
+//! let traced = surface.bvh(&DiceOptions { rate: DiceRate::Uniform(8), max_rate: 256 })?;
+//! let hit = traced.intersect(&Ray::new([0.0; 3], [0.3, 0.2, 1.0])).expect("closed surface");
+//! let exact = traced.intersect_exact(&Ray::new([0.0; 3], [0.3, 0.2, 1.0])).expect("refined");
+//! assert!((hit.t as f64 - exact.t).abs() < 1e-2);
+//! # Ok::<(), limitray::Error>(())
+//! ```
+
+use crate::bvh::exact::{refine_hit, ExactHit};
+use crate::bvh::{Hit, MeshBvh, Ray};
+use crate::coord::FaceCoord;
+use crate::dice::{dice, DiceOptions, DicedMesh};
+use crate::error::Result;
+use crate::mesh::obj::read_obj;
+use crate::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use crate::patch::{PatchOptions, PatchTable, Sample};
+use std::path::Path;
+use std::sync::Arc;
+
+/// How a [`Surface`] subdivides its control mesh. `None` fields take the mesh's own tags
+/// (`t creasemethod`, `t interpolateboundary`), else OpenSubdiv's defaults (uniform crease
+/// rule, edge-and-corner boundaries).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceOptions {
+    /// Crease rule override.
+    pub crease_method: Option<CreaseMethod>,
+    /// Boundary interpolation override.
+    pub boundary: Option<BoundaryInterpolation>,
+    /// Deepest feature-adaptive isolation level of the patch table.
+    pub max_level: usize,
+    /// Single-crease patches (paper 000) for faces with one semi-sharp crease.
+    pub single_crease: bool,
+}
+
+impl Default for SurfaceOptions {
+    fn default() -> Self {
+        SurfaceOptions {
+            crease_method: None,
+            boundary: None,
+            max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
+            single_crease: true,
+        }
+    }
+}
+
+/// A control mesh and its exact Catmull-Clark limit surface.
+#[derive(Debug)]
+pub struct Surface {
+    mesh: ControlMesh,
+    table: Arc<PatchTable>,
+    warnings: Vec<String>,
+}
+
+impl Surface {
+    /// The limit surface of `mesh` under `options`. Fails on invalid topology or tags (the
+    /// error names the element).
+    pub fn new(mesh: ControlMesh, options: SurfaceOptions) -> Result<Surface> {
+        let mut rules: Options = mesh.options;
+        if let Some(c) = options.crease_method {
+            rules.crease_method = c;
+        }
+        if let Some(b) = options.boundary {
+            rules.boundary = b;
+        }
+        let table = PatchTable::with_options(
+            &mesh,
+            rules,
+            PatchOptions {
+                max_level: options.max_level,
+                single_crease: options.single_crease,
+            },
+        )?;
+        let warnings = mesh.warnings.iter().map(|w| w.to_string()).collect();
+        Ok(Surface {
+            mesh,
+            table: Arc::new(table),
+            warnings,
+        })
+    }
+
+    /// Reads an OBJ file with OpenSubdiv's tags ([`crate::mesh::obj::read_obj`]) and builds its
+    /// surface. Errors name the file, line and element.
+    pub fn from_obj(path: impl AsRef<Path>, options: SurfaceOptions) -> Result<Surface> {
+        Surface::new(read_obj(path.as_ref())?, options)
+    }
+
+    /// What the input carried that was ignored or repaired (unknown statements, unsupported
+    /// tags …): returned for the caller to show, never printed.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// The control mesh.
+    pub fn mesh(&self) -> &ControlMesh {
+        &self.mesh
+    }
+
+    /// The feature-adaptive patch table.
+    pub fn patch_table(&self) -> &PatchTable {
+        &self.table
+    }
+
+    /// Number of base faces.
+    pub fn num_faces(&self) -> usize {
+        self.table.num_faces()
+    }
+
+    /// Sub-faces of base face `face` (1 for a quad, `n` for an n-gon; 0 when out of range).
+    pub fn sub_faces(&self, face: u32) -> usize {
+        if (face as usize) < self.num_faces() {
+            self.table.sub_faces(face as usize)
+        } else {
+            0
+        }
+    }
+
+    /// Whether base face `face` is part of the limit surface: false for holes (tagged, or made
+    /// by `interpolateboundary none`) and for faces out of range.
+    pub fn has_limit_surface(&self, face: u32) -> bool {
+        self.sub_faces(face) > 0 && self.table.eval(FaceCoord::quad(face, 0.5, 0.5)).is_ok()
+    }
+
+    /// The limit surface at `at`: position and first derivatives. `None` where there is no
+    /// surface: a hole, or `at` outside the domain (see [`Self::try_eval`] for the reason).
+    pub fn eval(&self, at: FaceCoord) -> Option<Sample> {
+        self.table.eval(at).ok()
+    }
+
+    /// [`Self::eval`] with the reason when there is no surface at `at`.
+    pub fn try_eval(&self, at: FaceCoord) -> Result<Sample> {
+        self.table.eval(at)
+    }
+
+    /// Crack-free triangles on the limit surface (vertices exact limit points).
+    pub fn dice(&self, options: &DiceOptions) -> Result<DicedMesh> {
+        dice(&self.table, &self.mesh, options)
+    }
+
+    /// The diced surface under a watertight BVH, ready for ray queries.
+    pub fn bvh(&self, options: &DiceOptions) -> Result<TracedSurface> {
+        Ok(TracedSurface {
+            table: self.table.clone(),
+            bvh: MeshBvh::build(self.dice(options)?),
+        })
+    }
+}
+
+/// A [`Surface`] diced and built into a BVH: watertight ray queries (no ray from inside a
+/// closed surface leaks), and hits refined onto the exact limit surface.
+#[derive(Debug)]
+pub struct TracedSurface {
+    table: Arc<PatchTable>,
+    bvh: MeshBvh,
+}
+
+impl TracedSurface {
+    /// The BVH (and through it the diced mesh).
+    pub fn mesh_bvh(&self) -> &MeshBvh {
+        &self.bvh
+    }
+
+    /// The closest hit of `ray` on the diced surface.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.bvh.intersect(ray)
+    }
+
+    /// Whether `ray` hits anything (any-hit query).
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.bvh.occluded(ray)
+    }
+
+    /// Closest hits of many rays, in parallel.
+    pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        self.bvh.intersect_batch(rays)
+    }
+
+    /// The closest diced hit refined onto the exact limit surface (Newton in `f64`); `None`
+    /// for a miss or a hit that cannot be refined (grazing, or the exact point in a
+    /// neighbouring face).
+    pub fn intersect_exact(&self, ray: &Ray) -> Option<ExactHit> {
+        let hit = self.bvh.intersect(ray)?;
+        refine_hit(&self.table, ray, &hit)
+    }
+}
