@@ -1,28 +1,10 @@
-//! OpenEXR output of a rendered film (RGBA beauty plus AOV channels) and channel reading (for
-//! environment maps and tests), through the `exr` crate.
-//!
-//! Channels written, all 32-bit float, one layer, ZIP compression in scan lines of 16, lines in
-//! increasing order (so that the same film always gives the same bytes):
-//!
-//! | channel | meaning |
-//! |---|---|
-//! | `R G B A` | mean radiance; alpha = fraction of samples whose camera ray hit geometry |
-//! | `Z` | camera distance of the first hit (`inf` for a miss) |
-//! | `N.X N.Y N.Z` | first-hit world-space shading normal (facing the camera), sample mean |
-//! | `albedo.R albedo.G albedo.B` | first-hit albedo, sample mean |
-//! | `faceid` | base face of the first hit (`-1` for a miss) |
-//! | `level` | patch subdivision level of the first hit (`-1` for a miss) |
+//! OpenEXR reading and writing of named `f32` planes, through the `exr` crate: one layer, ZIP
+//! compression in scan lines of 16, lines in increasing order (so that the same planes always
+//! give the same bytes). The renderer's channel set is [`crate::render::output`]'s.
 
 use crate::error::{Error, ErrorKind, Result};
-use crate::render::film::Film;
 use ::exr::prelude::*;
 use std::path::Path;
-
-/// The channel names written by [`write_film`], in the order of the table above.
-pub const CHANNELS: [&str; 13] = [
-    "R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "albedo.R", "albedo.G", "albedo.B", "faceid",
-    "level",
-];
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string())
@@ -55,26 +37,6 @@ pub fn write_planes(
         .write()
         .to_file(path)
         .map_err(|e| io_error(path, e))
-}
-
-/// Writes the film's beauty and AOVs (see the module documentation for the channels).
-pub fn write_film(path: &Path, film: &Film) -> Result<()> {
-    let planes = vec![
-        ("R", film.plane(|p| p.rgba[0])),
-        ("G", film.plane(|p| p.rgba[1])),
-        ("B", film.plane(|p| p.rgba[2])),
-        ("A", film.plane(|p| p.rgba[3])),
-        ("Z", film.plane(|p| p.z)),
-        ("N.X", film.plane(|p| p.normal[0])),
-        ("N.Y", film.plane(|p| p.normal[1])),
-        ("N.Z", film.plane(|p| p.normal[2])),
-        ("albedo.R", film.plane(|p| p.albedo[0])),
-        ("albedo.G", film.plane(|p| p.albedo[1])),
-        ("albedo.B", film.plane(|p| p.albedo[2])),
-        ("faceid", film.plane(|p| p.face)),
-        ("level", film.plane(|p| p.level)),
-    ];
-    write_planes(path, film.width as usize, film.height as usize, planes)
 }
 
 /// All channels of the first layer of an EXR file, converted to `f32`.
