@@ -208,8 +208,7 @@ impl Surface {
             let mut out = Vec::with_capacity(9 * n);
             for i in 0..n {
                 let index = |x: i64| {
-                    u32::try_from(x)
-                        .map_err(|_| usage(format!("sample {i}: invalid index '{x}'")))
+                    u32::try_from(x).map_err(|_| usage(format!("sample {i}: invalid index '{x}'")))
                 };
                 let (f, kk) = (index(face[i])?, index(k[i])?);
                 if !u[i].is_finite() || !v[i].is_finite() {
