@@ -3,47 +3,15 @@
 // operation in the same order and without fused multiply-add, so that on an IEEE device whose
 // + − × ÷ round like Rust's f32 (lavapipe does) every hit is bitwise the CPU's.
 //
-// Needs exact.wgsl (edge_exact) before it. The including kernel declares nothing of its own
-// in group 0 bindings 0..=8.
+// Needs the prelude (src/gpu/layout.rs: every record layout, `struct Params`) and exact.wgsl
+// (edge_exact) before it. The including kernel declares nothing of its own in group 0 bindings
+// 0..=GEO_CHUNKS.
 //
 // Geometry lives in one space of u32 words split over GEO_CHUNKS storage bindings of
 // 2^chunk_shift words each (a large scene exceeds one binding): word i is word
-// i & (2^shift − 1) of chunk i >> shift.
-//
-// Words of the space (offsets in `Params`):
-//   mesh records  8 words each: node offset, node count, vertex offset, triangle count,
-//                 box offset, 3 unused
-//   nodes         20 words per obvhs CwBvhNode (its 80 bytes, bytemuck)
-//   boxes         48 words per node: the exact f32 child boxes the CPU traverses (WideBoxes)
-//   vertices      9 words per leaf-ordered triangle (three corners, f32 bits)
-//   top nodes     the top-level CWBVH (scene mode), and its boxes
-//   top index     1 word per top-level leaf slot: the instance
-//   instances     16 words: mesh, 3 unused, then world-to-object x_axis, y_axis, z_axis,
-//                 translation (f32 bits, glam's Affine3A columns)
-
-struct Params {
-    chunk_shift: u32,
-    // 0: a single mesh (mesh record 0, no transform); 1: a scene of instances.
-    mode: u32,
-    mesh_off: u32,
-    top_node_off: u32,
-    top_node_count: u32,
-    top_index_off: u32,
-    inst_off: u32,
-    top_box_off: u32,
-    // Rays in this dispatch.
-    ray_count: u32,
-    // Loop iterations allowed per ray (all levels together) before it reports overflow.
-    max_iter: u32,
-    // 1 + 2γ(3), as the CPU computes it in f32.
-    box_scale: f32,
-    // Kernel-specific.
-    user0: u32,
-    user1: u32,
-    user2: u32,
-    user3: u32,
-    user4: u32,
-}
+// i & (2^shift − 1) of chunk i >> shift. The records of the space (mesh records, obvhs's
+// CwBvhNode as it is, exact child boxes, leaf-ordered triangles, the top level, instances) are
+// described once, in src/gpu/layout.rs; their offsets are in `Params`.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> g0: array<u32>;
@@ -56,7 +24,7 @@ struct Params {
 @group(0) @binding(8) var<storage, read> g7: array<u32>;
 
 // Chunks in use, fixed when the pipeline is created (one chunk: no chunk arithmetic).
-override GEO_USED: u32 = 8u;
+override GEO_USED: u32 = GEO_CHUNKS;
 
 fn gw(i: u32) -> u32 {
     if (GEO_USED == 1u) {
@@ -217,7 +185,7 @@ fn intersect_triangle(r: PRay, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, tmax: f
 }
 
 // ---------------------------------------------------------------------------------------------
-// CWBVH nodes (obvhs's CwBvhNode, 20 words) and the node test (node_hitmask).
+// CWBVH nodes (obvhs's CwBvhNode, NODE_WORDS words) and the node test (node_hitmask).
 
 fn byte_of(lo: u32, hi: u32, c: u32) -> u32 {
     let w = select(lo, hi, c >= 4u);
@@ -225,11 +193,11 @@ fn byte_of(lo: u32, hi: u32, c: u32) -> u32 {
 }
 
 // The node test (wide_hitmask): PreparedRay::hits_box over the exact f32 child boxes that the
-// CPU traverses (48 words at `bx`: lo[axis][child], then hi[axis][child]), with the max/min of
+// CPU traverses (BOX_WORDS words at `bx`: lo[axis][child], then hi[axis][child]), with the max/min of
 // the SSE version (a NaN distance keeps the bound). Child order and masks from the node at `n`.
 fn node_hitmask(n: u32, bx: u32, r: PRay, tmax: f32) -> u32 {
-    let meta_lo = gw(n + 6u);
-    let meta_hi = gw(n + 7u);
+    let meta_lo = gw(n + NODE_META);
+    let meta_hi = gw(n + NODE_META + 1u);
     // get_child_and_index_bits, one 32-bit half at a time (no bit crosses a byte that matters).
     let oct = r.oct_inv4;
     let inner_lo = (meta_lo & (meta_lo << 1u)) & 0x10101010u;
@@ -241,15 +209,15 @@ fn node_hitmask(n: u32, bx: u32, r: PRay, tmax: f32) -> u32 {
     let cbits_lo = (meta_lo >> 5u) & 0x07070707u;
     let cbits_hi = (meta_hi >> 5u) & 0x07070707u;
     var mask = 0u;
-    for (var c = 0u; c < 8u; c++) {
+    for (var c = 0u; c < NODE_CHILDREN; c++) {
         if (byte_of(meta_lo, meta_hi, c) == 0u) {
             continue;
         }
         var near = r.tmin;
         var far = tmax;
         for (var a = 0u; a < 3u; a++) {
-            let lo = gf(bx + 8u * a + c);
-            let hi = gf(bx + 24u + 8u * a + c);
+            let lo = gf(bx + NODE_CHILDREN * a + c);
+            let hi = gf(bx + BOX_HI + NODE_CHILDREN * a + c);
             var nn = lo;
             var ff = hi;
             if (sign_negative(r.inv[a])) {
@@ -273,9 +241,83 @@ fn node_hitmask(n: u32, bx: u32, r: PRay, tmax: f32) -> u32 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Traversal: obvhs's traverse! macro (the same child order, the same saturating 32-entry stack).
+// Traversal: obvhs's traverse! macro (the same child order), one node step at a time, shared by
+// the mesh level and the top level, closest and any hit.
+//
+// The stack has TRAVERSAL_STACK entries. The CPU's has 64 and grows past that, so it never
+// drops an entry; here a push that fills the stack flags `overflow`, the ray is reported with
+// STATUS_OVERFLOW and the host turns that into an error: never a silently wrong answer.
 
-const STACK: u32 = 32u;
+struct Walk {
+    stack: array<vec2<u32>, TRAVERSAL_STACK>,
+    sp: u32,
+    // obvhs's current_group and primitive_group: (base index, hit bits).
+    cur: vec2<u32>,
+    prim: vec2<u32>,
+}
+
+fn walk_new() -> Walk {
+    var w: Walk;
+    w.sp = 0u;
+    w.cur = vec2<u32>(0u, 0x80000000u);
+    w.prim = vec2<u32>(0u, 0u);
+    return w;
+}
+
+// Iterations used so far by this invocation, and whether a bound was exceeded.
+var<private> iters: u32;
+var<private> overflow: bool;
+
+// Counts one loop iteration; false (and `overflow`) past the bound.
+fn walk_iter() -> bool {
+    iters += 1u;
+    if (iters > P.max_iter) {
+        overflow = true;
+        return false;
+    }
+    return true;
+}
+
+// One step of the walk, after the caller has consumed the leaf hits in `w.prim`: visits the
+// nearest child of the current group (nodes at `node_off`, their boxes at `box_off`), leaving
+// that node's leaf hits in `w.prim`, or pops the stack. False when the walk is over.
+fn walk_step(w: ptr<function, Walk>, node_off: u32, box_off: u32, r: PRay, tmax: f32) -> bool {
+    (*w).prim = vec2<u32>(0u, 0u);
+    if (((*w).cur.y & 0xff000000u) != 0u) {
+        let hits = (*w).cur.y;
+        let off = firstLeadingBit(hits);
+        let base = (*w).cur.x;
+        (*w).cur.y &= ~(1u << off);
+        if (((*w).cur.y & 0xff000000u) != 0u) {
+            let sp = (*w).sp;
+            (*w).stack[sp] = (*w).cur;
+            if (sp == TRAVERSAL_STACK - 1u) {
+                overflow = true;
+            }
+            (*w).sp = min(sp + 1u, TRAVERSAL_STACK - 1u);
+        }
+        let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
+        let rel = countOneBits(hits & ~(0xffffffffu << slot));
+        let ni = base + rel;
+        let node = node_off + NODE_WORDS * ni;
+        let hm = node_hitmask(node, box_off + BOX_WORDS * ni, r, tmax);
+        let imask = (gw(node + NODE_IMASK) >> 24u) & 0xffu;
+        (*w).cur.x = gw(node + NODE_CHILD_BASE);
+        (*w).prim.x = gw(node + NODE_PRIM_BASE);
+        (*w).cur.y = (hm & 0xff000000u) | imask;
+        (*w).prim.y = hm & 0x00ffffffu;
+    } else {
+        (*w).cur = vec2<u32>(0u, 0u);
+    }
+    if ((*w).prim.y == 0u && ((*w).cur.y & 0xff000000u) == 0u) {
+        if ((*w).sp == 0u) {
+            return false;
+        }
+        (*w).sp -= 1u;
+        (*w).cur = (*w).stack[(*w).sp];
+    }
+    return true;
+}
 
 struct MeshHit {
     hit: bool,
@@ -285,38 +327,29 @@ struct MeshHit {
     b2: f32,
 }
 
-// Iterations used so far by this invocation, and whether a bound was exceeded.
-var<private> iters: u32;
-var<private> overflow: bool;
-
 // Closest hit in mesh record `m` (MeshBvh::intersect): lowest leaf index on equal t.
-// With `any`, the first hit found ends the traversal (MeshBvh::occluded).
+// With `anyhit`, the first hit found ends the traversal (MeshBvh::occluded).
 fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
     var best = MeshHit(false, 0u, 0.0, 0.0, 0.0);
-    let rec = P.mesh_off + 8u * m;
-    let node_off = gw(rec);
-    let node_count = gw(rec + 1u);
-    let vert_off = gw(rec + 2u);
-    let box_off = gw(rec + 4u);
+    let rec = P.mesh_off + MESH_WORDS * m;
+    let node_off = gw(rec + MESH_NODE_OFF);
+    let node_count = gw(rec + MESH_NODE_COUNT);
+    let vert_off = gw(rec + MESH_VERT_OFF);
+    let box_off = gw(rec + MESH_BOX_OFF);
     if (node_count == 0u || !r.ok) {
         return best;
     }
     var tmax = r.tmax;
-    var stack: array<vec2<u32>, STACK>;
-    var sp = 0u;
-    var cur = vec2<u32>(0u, 0x80000000u);
-    var prim = vec2<u32>(0u, 0u);
+    var w = walk_new();
     loop {
-        iters += 1u;
-        if (iters > P.max_iter) {
-            overflow = true;
+        if (!walk_iter()) {
             break;
         }
-        while (prim.y != 0u) {
-            let l = firstLeadingBit(prim.y);
-            prim.y &= ~(1u << l);
-            let li = prim.x + l;
-            let v = vert_off + 9u * li;
+        while (w.prim.y != 0u) {
+            let l = firstLeadingBit(w.prim.y);
+            w.prim.y &= ~(1u << l);
+            let li = w.prim.x + l;
+            let v = vert_off + TRI_WORDS * li;
             let a = vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u));
             let b = vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u));
             let c = vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u));
@@ -329,38 +362,8 @@ fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
                 tmax = h.t;
             }
         }
-        prim = vec2<u32>(0u, 0u);
-        if ((cur.y & 0xff000000u) != 0u) {
-            let hits = cur.y;
-            let off = firstLeadingBit(hits);
-            let base = cur.x;
-            cur.y &= ~(1u << off);
-            if ((cur.y & 0xff000000u) != 0u) {
-                stack[sp] = cur;
-                if (sp == STACK - 1u) {
-                    overflow = true;
-                }
-                sp = min(sp + 1u, STACK - 1u);
-            }
-            let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
-            let rel = countOneBits(hits & ~(0xffffffffu << slot));
-            let ni = base + rel;
-            let node = node_off + 20u * ni;
-            let hm = node_hitmask(node, box_off + 48u * ni, r, tmax);
-            let imask = (gw(node + 3u) >> 24u) & 0xffu;
-            cur.x = gw(node + 4u);
-            prim.x = gw(node + 5u);
-            cur.y = (hm & 0xff000000u) | imask;
-            prim.y = hm & 0x00ffffffu;
-        } else {
-            cur = vec2<u32>(0u, 0u);
-        }
-        if (prim.y == 0u && (cur.y & 0xff000000u) == 0u) {
-            if (sp == 0u) {
-                break;
-            }
-            sp -= 1u;
-            cur = stack[sp];
+        if (!walk_step(&w, node_off, box_off, r, tmax)) {
+            break;
         }
     }
     return best;
@@ -403,24 +406,19 @@ fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32, anyhit: bo
         return best;
     }
     var tmax = tmax0;
-    var stack: array<vec2<u32>, STACK>;
-    var sp = 0u;
-    var cur = vec2<u32>(0u, 0x80000000u);
-    var prim = vec2<u32>(0u, 0u);
+    var w = walk_new();
     loop {
-        iters += 1u;
-        if (iters > P.max_iter) {
-            overflow = true;
+        if (!walk_iter()) {
             break;
         }
-        while (prim.y != 0u && !overflow) {
-            let l = firstLeadingBit(prim.y);
-            prim.y &= ~(1u << l);
-            let i = gw(P.top_index_off + prim.x + l);
-            let ib = P.inst_off + 16u * i;
-            let m = gw(ib);
-            let oo = inst_vec(ib + 4u, o, true);
-            let od = inst_vec(ib + 4u, d, false);
+        while (w.prim.y != 0u && !overflow) {
+            let l = firstLeadingBit(w.prim.y);
+            w.prim.y &= ~(1u << l);
+            let i = gw(P.top_index_off + w.prim.x + l);
+            let ib = P.inst_off + INSTANCE_WORDS * i;
+            let m = gw(ib + INST_MESH);
+            let oo = inst_vec(ib + INST_XFORM, o, true);
+            let od = inst_vec(ib + INST_XFORM, d, false);
             let h = intersect_mesh(m, prepare_ray(oo, od, tmin, tmax), anyhit);
             if (h.hit && (!best.hit || h.t < best.t || (h.t == best.t && i < best.inst))) {
                 best = SceneResult(true, i, h.leaf, h.t, h.b1, h.b2);
@@ -433,38 +431,8 @@ fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32, anyhit: bo
         if (overflow) {
             break;
         }
-        prim = vec2<u32>(0u, 0u);
-        if ((cur.y & 0xff000000u) != 0u) {
-            let hits = cur.y;
-            let off = firstLeadingBit(hits);
-            let base = cur.x;
-            cur.y &= ~(1u << off);
-            if ((cur.y & 0xff000000u) != 0u) {
-                stack[sp] = cur;
-                if (sp == STACK - 1u) {
-                    overflow = true;
-                }
-                sp = min(sp + 1u, STACK - 1u);
-            }
-            let slot = (off - 24u) ^ (r.oct_inv4 & 0xffu);
-            let rel = countOneBits(hits & ~(0xffffffffu << slot));
-            let ni = base + rel;
-            let node = P.top_node_off + 20u * ni;
-            let hm = node_hitmask(node, P.top_box_off + 48u * ni, r, tmax);
-            let imask = (gw(node + 3u) >> 24u) & 0xffu;
-            cur.x = gw(node + 4u);
-            prim.x = gw(node + 5u);
-            cur.y = (hm & 0xff000000u) | imask;
-            prim.y = hm & 0x00ffffffu;
-        } else {
-            cur = vec2<u32>(0u, 0u);
-        }
-        if (prim.y == 0u && (cur.y & 0xff000000u) == 0u) {
-            if (sp == 0u) {
-                break;
-            }
-            sp -= 1u;
-            cur = stack[sp];
+        if (!walk_step(&w, P.top_node_off, P.top_box_off, r, tmax)) {
+            break;
         }
     }
     return best;

@@ -3,7 +3,7 @@
 @group(0) @binding(0) var<storage, read> cases: array<f32>;
 @group(0) @binding(1) var<storage, read_write> results: array<u32>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn exact_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if (i >= arrayLength(&results)) {

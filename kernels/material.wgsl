@@ -2,20 +2,14 @@
 // IOR or Schlick), smooth and rough dielectric, emissive. Needs sampling.wgsl and path.wgsl.
 
 // ---------------------------------------------------------------------------------------------
-// material.rs. Material at word m (12 words): kind, then parameters.
-
-const M_DIFFUSE: u32 = 0u;
-const M_CONDUCTOR: u32 = 1u;
-const M_SCHLICK: u32 = 2u;
-const M_DIELECTRIC: u32 = 3u;
-const M_EMISSIVE: u32 = 4u;
+// material.rs. Material at word m (MAT_WORDS words): kind (M_*), then parameters (MAT_*).
 
 fn mat_kind(m: u32) -> u32 {
-    return gw(m);
+    return gw(m + MAT_KIND);
 }
 
 fn mat_alpha(m: u32) -> f32 {
-    return gf(m + 7u);
+    return gf(m + MAT_ALPHA);
 }
 
 fn mat_is_delta(m: u32) -> bool {
@@ -75,15 +69,15 @@ fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 
 fn fresnel_eval(m: u32, cos_i: f32) -> vec3<f32> {
     if (mat_kind(m) == M_CONDUCTOR) {
-        let eta = v3(m + 1u);
-        let k = v3(m + 4u);
+        let eta = v3(m + MAT_COLOR);
+        let k = v3(m + MAT_K);
         return vec3<f32>(
             fresnel_conductor(cos_i, eta.x, k.x),
             fresnel_conductor(cos_i, eta.y, k.y),
             fresnel_conductor(cos_i, eta.z, k.z),
         );
     }
-    let f0 = v3(m + 1u);
+    let f0 = v3(m + MAT_COLOR);
     let mm = fclamp(1.0 - cos_i, 0.0, 1.0);
     let m2 = mm * mm;
     let m5 = m2 * m2 * mm;
@@ -93,7 +87,7 @@ fn fresnel_eval(m: u32, cos_i: f32) -> vec3<f32> {
 fn mat_albedo(m: u32) -> vec3<f32> {
     let k = mat_kind(m);
     if (k == M_DIFFUSE) {
-        return v3(m + 1u);
+        return v3(m + MAT_COLOR);
     }
     if (k == M_CONDUCTOR || k == M_SCHLICK) {
         return fresnel_eval(m, 1.0);

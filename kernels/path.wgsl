@@ -8,36 +8,11 @@
 // user1 = word offset of the render block, user2..user3 = sample range [s0, s1),
 // ray_count = pixels in the dispatch.
 //
-// Render block (words from R = user1): see src/gpu/render.rs (`pack_world`).
+// Render block (words from R = user1): a header (H_*) of absolute offsets to its records,
+// all laid out in src/gpu/layout.rs and packed by src/gpu/render.rs (`pack_world`).
 
 @group(0) @binding(9) var<storage, read_write> acc: array<f32>;
 @group(0) @binding(10) var<storage, read_write> prim: array<u32>;
-
-const PI: f32 = 3.14159265358979323846;
-const DELTA_ALPHA: f32 = 1e-3;
-const RR_START: u32 = 3u;
-const NONE: u32 = 0xffffffffu;
-// Accumulator floats per pixel: sum rgb, alpha, normal xyz, albedo xyz, 2 unused.
-const ACC: u32 = 12u;
-
-// Header words of the render block.
-const H_WIDTH: u32 = 0u;
-const H_HEIGHT: u32 = 1u;
-const H_MAX_DEPTH: u32 = 3u;
-const H_SEED: u32 = 4u;
-const H_MAT: u32 = 5u;
-const H_INST_MAT: u32 = 6u;
-const H_NQUADS: u32 = 7u;
-const H_QUADS: u32 = 8u;
-const H_NMESHL: u32 = 9u;
-const H_MESHL: u32 = 10u;
-const H_INST_LIGHT: u32 = 11u;
-const H_ENV_KIND: u32 = 12u;
-const H_ENV: u32 = 13u;
-const H_SELECT: u32 = 14u;
-const H_INST_XF: u32 = 15u;
-const H_MESH_EXTRA: u32 = 16u;
-const H_CAMERA: u32 = 20u;
 
 // +∞ (not a constant expression: WGSL constants must be finite; user4 is 0).
 fn inf() -> f32 {
@@ -53,14 +28,13 @@ fn v3(i: u32) -> vec3<f32> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// light.rs. Quad (16 words): corner, edge1, edge2, normal, area, radiance.
-// Mesh light (8 words): instance, area, radiance, triangle count, triangles (offset; 9 f32
-// each, world space), distribution (offset).
+// light.rs. Quads (QUAD_*) and mesh lights (MESHL_*: world-space triangles and an area
+// distribution).
 
 fn quad_intersect(q: u32, o: vec3<f32>, d: vec3<f32>, tmax: f32) -> f32 {
-    let corner = v3(q);
-    let e1 = v3(q + 3u);
-    let e2 = v3(q + 6u);
+    let corner = v3(q + QUAD_CORNER);
+    let e1 = v3(q + QUAD_EDGE1);
+    let e2 = v3(q + QUAD_EDGE2);
     let n = cross3(e1, e2);
     let denom = dot3(d, n);
     if (denom == 0.0) {
@@ -92,7 +66,7 @@ fn intersect_quads(o: vec3<f32>, d: vec3<f32>, tmax: f32) -> QuadHit {
     let n = hdr(H_NQUADS);
     let base = hdr(H_QUADS);
     for (var i = 0u; i < n; i++) {
-        let t = quad_intersect(base + 16u * i, o, d, tm);
+        let t = quad_intersect(base + QUAD_WORDS * i, o, d, tm);
         if (t > 0.0) {
             tm = t;
             best = QuadHit(true, t, i);
@@ -119,7 +93,7 @@ fn pdf_area_light(slot: u32, area: f32, dist: f32, cos_l: f32) -> f32 {
 }
 
 fn pdf_env(wi: vec3<f32>) -> f32 {
-    if (hdr(H_ENV_KIND) == 0u) {
+    if (hdr(H_ENV_KIND) == ENV_NONE) {
         return 0.0;
     }
     return select_pmf(hdr(H_NQUADS) + hdr(H_NMESHL)) * env_pdf(wi);
@@ -151,9 +125,9 @@ fn sample_light(p: vec3<f32>, u_sel: f32, u1: f32, u2: f32) -> LightSample {
     let nq = hdr(H_NQUADS);
     let nm = hdr(H_NMESHL);
     if (s.i < nq) {
-        let q = hdr(H_QUADS) + 16u * s.i;
-        let normal = v3(q + 9u);
-        let point = (v3(q) + v3(q + 3u) * u1) + v3(q + 6u) * u2;
+        let q = hdr(H_QUADS) + QUAD_WORDS * s.i;
+        let normal = v3(q + QUAD_NORMAL);
+        let point = (v3(q + QUAD_CORNER) + v3(q + QUAD_EDGE1) * u1) + v3(q + QUAD_EDGE2) * u2;
         let dd = point - p;
         let dist = length3(dd);
         if (!(dist > 0.0 && finite(dist))) {
@@ -164,13 +138,13 @@ fn sample_light(p: vec3<f32>, u_sel: f32, u1: f32, u2: f32) -> LightSample {
         if (cos_l <= 0.0) {
             return no_light();
         }
-        let pdf = s.p * dist * dist / (cos_l * gf(q + 12u));
-        return LightSample(true, wi, point, normal, dist, v3(q + 13u), pdf);
+        let pdf = s.p * dist * dist / (cos_l * gf(q + QUAD_AREA));
+        return LightSample(true, wi, point, normal, dist, v3(q + QUAD_RADIANCE), pdf);
     }
     if (s.i < nq + nm) {
-        let ml = hdr(H_MESHL) + 8u * (s.i - nq);
-        let ts = dist_sample(gw(ml + 7u), u1);
-        let tri = gw(ml + 6u) + 9u * ts.i;
+        let ml = hdr(H_MESHL) + MESHL_WORDS * (s.i - nq);
+        let ts = dist_sample(gw(ml + MESHL_DIST), u1);
+        let tri = gw(ml + MESHL_TRIS) + TRI_WORDS * ts.i;
         let t0 = v3(tri);
         let t1 = v3(tri + 3u);
         let t2 = v3(tri + 6u);
@@ -191,10 +165,10 @@ fn sample_light(p: vec3<f32>, u_sel: f32, u1: f32, u2: f32) -> LightSample {
         if (dot3(ng, wi) < 0.0) {
             normal = ng;
         }
-        let pdf = s.p * dist * dist / (cos_l * gf(ml + 1u));
-        return LightSample(true, wi, point, normal, dist, v3(ml + 2u), pdf);
+        let pdf = s.p * dist * dist / (cos_l * gf(ml + MESHL_AREA));
+        return LightSample(true, wi, point, normal, dist, v3(ml + MESHL_RADIANCE), pdf);
     }
-    if (hdr(H_ENV_KIND) == 0u) {
+    if (hdr(H_ENV_KIND) == ENV_NONE) {
         return no_light();
     }
     let es = env_sample(u1, u2);
@@ -246,10 +220,10 @@ struct SurfaceHit {
 
 // The world-space hit record (SceneBvh::hit_record and World::hit_point).
 fn surface(h: SceneResult) -> SurfaceHit {
-    let ib = P.inst_off + 16u * h.inst;
-    let m = gw(ib);
-    let rec = P.mesh_off + 8u * m;
-    let v = gw(rec + 2u) + 9u * h.leaf;
+    let ib = P.inst_off + INSTANCE_WORDS * h.inst;
+    let m = gw(ib + INST_MESH);
+    let rec = P.mesh_off + MESH_WORDS * m;
+    let v = gw(rec + MESH_VERT_OFF) + TRI_WORDS * h.leaf;
     let a = v3(v);
     let b = v3(v + 3u);
     let c = v3(v + 6u);
@@ -261,7 +235,7 @@ fn surface(h: SceneResult) -> SurfaceHit {
         e1.z * e2.x - e1.x * e2.z,
         e1.x * e2.y - e1.y * e2.x,
     ));
-    let nb = gw(hdr(H_MESH_EXTRA) + 4u * m) + 9u * h.leaf;
+    let nb = gw(hdr(H_MESH_EXTRA) + MESH_EXTRA_WORDS * m + MX_NORMALS) + TRI_WORDS * h.leaf;
     let n0 = v3(nb);
     let n1 = v3(nb + 3u);
     let n2 = v3(nb + 6u);
@@ -269,14 +243,15 @@ fn surface(h: SceneResult) -> SurfaceHit {
     if (!finite3(ns)) {
         ns = ng;
     }
-    let xf = hdr(H_INST_XF) + 24u * h.inst;
-    let p = mat3_mul(xf, (a * (1.0 - h.b1 - h.b2) + b * h.b1) + c * h.b2) + v3(xf + 9u);
+    let xf = hdr(H_INST_XF) + XF_WORDS * h.inst;
+    let p = mat3_mul(xf + XF_MATRIX, (a * (1.0 - h.b1 - h.b2) + b * h.b1) + c * h.b2)
+        + v3(xf + XF_TRANSLATION);
     return SurfaceHit(
         h.inst,
         h.t,
         p,
-        normalize_div(mat3_mul(xf + 12u, ng)),
-        normalize_div(mat3_mul(xf + 12u, ns)),
+        normalize_div(mat3_mul(xf + XF_NORMAL, ng)),
+        normalize_div(mat3_mul(xf + XF_NORMAL, ns)),
     );
 }
 
@@ -312,7 +287,7 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
         }
         let qh = intersect_quads(o, d, tmax);
         if (!mh.hit && !qh.hit) {
-            if (hdr(H_ENV_KIND) != 0u) {
+            if (hdr(H_ENV_KIND) != ENV_NONE) {
                 let le = env_eval(d);
                 var w = 1.0;
                 if (!prev_delta) {
@@ -323,19 +298,19 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
             break;
         }
         if (qh.hit) {
-            let q = hdr(H_QUADS) + 16u * qh.i;
-            let cos_l = -dot3(d, v3(q + 9u));
+            let q = hdr(H_QUADS) + QUAD_WORDS * qh.i;
+            let cos_l = -dot3(d, v3(q + QUAD_NORMAL));
             if (cos_l > 0.0) {
                 var w = 1.0;
                 if (!prev_delta) {
-                    w = power_heuristic(prev_pdf, pdf_area_light(qh.i, gf(q + 12u), qh.t, cos_l));
+                    w = power_heuristic(prev_pdf, pdf_area_light(qh.i, gf(q + QUAD_AREA), qh.t, cos_l));
                 }
-                l += beta * v3(q + 13u) * w;
+                l += beta * v3(q + QUAD_RADIANCE) * w;
             }
             break;
         }
         let h = surface(mh);
-        let mat = hdr(H_MAT) + 12u * gw(hdr(H_INST_MAT) + h.inst);
+        let mat = hdr(H_MAT) + MAT_WORDS * gw(hdr(H_INST_MAT) + h.inst);
         let wo = -d;
         if (mat_kind(mat) == M_EMISSIVE) {
             if (bounce == 0u) {
@@ -347,10 +322,10 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
             let li = gw(hdr(H_INST_LIGHT) + h.inst);
             if (li != NONE && !prev_delta) {
                 let cos_l = dot3(d, h.ng);
-                let ml = hdr(H_MESHL) + 8u * li;
-                w = power_heuristic(prev_pdf, pdf_area_light(nq + li, gf(ml + 1u), h.t, cos_l));
+                let ml = hdr(H_MESHL) + MESHL_WORDS * li;
+                w = power_heuristic(prev_pdf, pdf_area_light(nq + li, gf(ml + MESHL_AREA), h.t, cos_l));
             }
-            l += beta * v3(mat + 1u) * w;
+            l += beta * v3(mat + MAT_COLOR) * w;
             break;
         }
         // Shading geometry.
@@ -366,7 +341,7 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
         }
         var etap = 1.0;
         if (mat_kind(mat) == M_DIELECTRIC) {
-            let ior = gf(mat + 1u);
+            let ior = gf(mat + MAT_COLOR);
             etap = select(1.0 / ior, ior, front);
         }
         let frame = frame_new(ns);
@@ -459,13 +434,13 @@ struct CamRay {
 // camera.rs Camera::ray.
 fn camera_ray(px: f32, py: f32, lu: f32, lv: f32) -> CamRay {
     let c = P.user1 + H_CAMERA;
-    let position = v3(c);
-    let forward = v3(c + 3u);
-    let right = v3(c + 6u);
-    let up = v3(c + 9u);
-    let tan_half = gf(c + 12u);
-    let aperture = gf(c + 13u);
-    let focus_distance = gf(c + 14u);
+    let position = v3(c + CAM_POSITION);
+    let forward = v3(c + CAM_FORWARD);
+    let right = v3(c + CAM_RIGHT);
+    let up = v3(c + CAM_UP);
+    let tan_half = gf(c + CAM_TAN_HALF_FOV);
+    let aperture = gf(c + CAM_APERTURE);
+    let focus_distance = gf(c + CAM_FOCUS_DISTANCE);
     let w = f32(hdr(H_WIDTH));
     let h = f32(hdr(H_HEIGHT));
     let aspect = w / h;
@@ -485,7 +460,7 @@ fn camera_ray(px: f32, py: f32, lu: f32, lv: f32) -> CamRay {
 }
 
 // Adds samples [user2, user3) of each pixel of the dispatch to its accumulator, in sample order.
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn path_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= P.ray_count) {
         return;
@@ -495,11 +470,13 @@ fn path_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = pixel % width;
     let y = pixel / width;
     let seed = hdr(H_SEED);
-    let a = ACC * gid.x;
-    var sum = vec3<f32>(acc[a], acc[a + 1u], acc[a + 2u]);
-    var alpha = acc[a + 3u];
-    var normal = vec3<f32>(acc[a + 4u], acc[a + 5u], acc[a + 6u]);
-    var albedo = vec3<f32>(acc[a + 7u], acc[a + 8u], acc[a + 9u]);
+    let a = ACC_WORDS * gid.x;
+    let an = a + ACC_NORMAL;
+    let aa = a + ACC_ALBEDO;
+    var sum = vec3<f32>(acc[a + ACC_RGB], acc[a + ACC_RGB + 1u], acc[a + ACC_RGB + 2u]);
+    var alpha = acc[a + ACC_ALPHA];
+    var normal = vec3<f32>(acc[an], acc[an + 1u], acc[an + 2u]);
+    var albedo = vec3<f32>(acc[aa], acc[aa + 1u], acc[aa + 2u]);
     iters = 0u;
     overflow = false;
     for (var s = P.user2; s < P.user3; s++) {
@@ -520,22 +497,22 @@ fn path_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // The iteration bound is per path.
         iters = 0u;
     }
-    acc[a] = sum.x;
-    acc[a + 1u] = sum.y;
-    acc[a + 2u] = sum.z;
-    acc[a + 3u] = alpha;
-    acc[a + 4u] = normal.x;
-    acc[a + 5u] = normal.y;
-    acc[a + 6u] = normal.z;
-    acc[a + 7u] = albedo.x;
-    acc[a + 8u] = albedo.y;
-    acc[a + 9u] = albedo.z;
-    acc[a + 10u] = select(acc[a + 10u], 1.0, overflow);
+    acc[a + ACC_RGB] = sum.x;
+    acc[a + ACC_RGB + 1u] = sum.y;
+    acc[a + ACC_RGB + 2u] = sum.z;
+    acc[a + ACC_ALPHA] = alpha;
+    acc[an] = normal.x;
+    acc[an + 1u] = normal.y;
+    acc[an + 2u] = normal.z;
+    acc[aa] = albedo.x;
+    acc[aa + 1u] = albedo.y;
+    acc[aa + 2u] = albedo.z;
+    acc[a + ACC_OVERFLOW] = select(acc[a + ACC_OVERFLOW], 1.0, overflow);
 }
 
-// The centre ray of each pixel of the dispatch (the AOV ray): status (0 miss, 1 mesh hit,
-// 2 overflow, 3 a quad light in front), instance, leaf, t, b1, b2 (bits), 8 words per pixel.
-@compute @workgroup_size(64)
+// The centre ray of each pixel of the dispatch (the AOV ray): a hit record (HIT_*) per pixel,
+// with STATUS_QUAD_LIGHT when a quad light is in front of any mesh.
+@compute @workgroup_size(WORKGROUP)
 fn primary_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= P.ray_count) {
         return;
@@ -548,22 +525,22 @@ fn primary_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     overflow = false;
     let r = camera_ray(f32(x) + 0.5, f32(y) + 0.5, 0.5, 0.5);
     let h = intersect_world(r.o, r.d, 0.0, inf(), false);
-    var status = select(0u, 1u, h.hit);
+    var status = select(STATUS_MISS, STATUS_HIT, h.hit);
     var tmax = inf();
     if (h.hit) {
         tmax = h.t;
     }
     if (intersect_quads(r.o, r.d, tmax).hit) {
-        status = 3u;
+        status = STATUS_QUAD_LIGHT;
     }
     if (overflow) {
-        status = 2u;
+        status = STATUS_OVERFLOW;
     }
-    let a = 8u * gid.x;
-    prim[a] = status;
-    prim[a + 1u] = h.inst;
-    prim[a + 2u] = h.leaf;
-    prim[a + 3u] = bitcast<u32>(h.t);
-    prim[a + 4u] = bitcast<u32>(h.b1);
-    prim[a + 5u] = bitcast<u32>(h.b2);
+    let a = HIT_WORDS * gid.x;
+    prim[a + HIT_STATUS] = status;
+    prim[a + HIT_INSTANCE] = h.inst;
+    prim[a + HIT_LEAF] = h.leaf;
+    prim[a + HIT_T] = bitcast<u32>(h.t);
+    prim[a + HIT_B1] = bitcast<u32>(h.b1);
+    prim[a + HIT_B2] = bitcast<u32>(h.b2);
 }

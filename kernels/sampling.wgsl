@@ -100,20 +100,6 @@ fn rnd(key: u32, dim: u32) -> f32 {
     return to_unit(pcg_hash(key ^ dim));
 }
 
-const D_PIXEL_X: u32 = 0u;
-const D_PIXEL_Y: u32 = 1u;
-const D_LENS_U: u32 = 2u;
-const D_LENS_V: u32 = 3u;
-const D_BOUNCE_BASE: u32 = 4u;
-const D_PER_BOUNCE: u32 = 8u;
-const D_LIGHT_SELECT: u32 = 0u;
-const D_LIGHT_U: u32 = 1u;
-const D_LIGHT_V: u32 = 2u;
-const D_BSDF_LOBE: u32 = 3u;
-const D_BSDF_U: u32 = 4u;
-const D_BSDF_V: u32 = 5u;
-const D_RR: u32 = 6u;
-
 fn bdim(key: u32, bounce: u32, j: u32) -> f32 {
     return rnd(key, D_BOUNCE_BASE + bounce * D_PER_BOUNCE + j);
 }
@@ -191,7 +177,7 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     return 1.0;
 }
 
-// Distribution1D at word d: n, total, cdf[n + 1], pmf[n].
+// Distribution1D at word d: n (DIST_N), total, cdf[n + 1] (from DIST_CDF), pmf[n].
 struct Sample1D {
     i: u32,
     p: f32,
@@ -199,17 +185,17 @@ struct Sample1D {
 }
 
 fn dist_n(d: u32) -> u32 {
-    return gw(d);
+    return gw(d + DIST_N);
 }
 
 fn dist_pmf(d: u32, i: u32) -> f32 {
-    return gf(d + 3u + gw(d) + i);
+    return gf(d + DIST_CDF + 1u + dist_n(d) + i);
 }
 
 fn dist_sample(d: u32, u: f32) -> Sample1D {
-    let n = gw(d);
-    let cdf = d + 2u;
-    let pmf = d + 3u + n;
+    let n = dist_n(d);
+    let cdf = d + DIST_CDF;
+    let pmf = cdf + n + 1u;
     var lo = 0u;
     var hi = n;
     for (var k = 0u; k < 40u && hi - lo > 1u; k++) {
@@ -232,17 +218,17 @@ fn dist_sample(d: u32, u: f32) -> Sample1D {
     return Sample1D(i, p, rem);
 }
 
-// Distribution2D at word d: width, height, rows (offset), cols offsets[height].
+// Distribution2D at word d (DIST2_*): width, height, rows (offset), cols offsets[height].
 struct Sample2D {
     uv: vec2<f32>,
     pdf: f32,
 }
 
 fn dist2_sample(d: u32, u1: f32, u2: f32) -> Sample2D {
-    let w = gw(d);
-    let h = gw(d + 1u);
-    let ry = dist_sample(gw(d + 2u), u1);
-    let rx = dist_sample(gw(d + 3u + ry.i), u2);
+    let w = gw(d + DIST2_WIDTH);
+    let h = gw(d + DIST2_HEIGHT);
+    let ry = dist_sample(gw(d + DIST2_ROWS), u1);
+    let rx = dist_sample(gw(d + DIST2_COLS + ry.i), u2);
     let pdf = ry.p * rx.p * f32(w * h);
     return Sample2D(
         vec2<f32>((f32(rx.i) + rx.rem) / f32(w), (f32(ry.i) + ry.rem) / f32(h)),
@@ -251,13 +237,13 @@ fn dist2_sample(d: u32, u1: f32, u2: f32) -> Sample2D {
 }
 
 fn dist2_pdf_cell(d: u32, x: u32, y: u32) -> f32 {
-    let w = gw(d);
-    let h = gw(d + 1u);
-    return dist_pmf(gw(d + 2u), y) * dist_pmf(gw(d + 3u + y), x) * f32(w * h);
+    let w = gw(d + DIST2_WIDTH);
+    let h = gw(d + DIST2_HEIGHT);
+    return dist_pmf(gw(d + DIST2_ROWS), y) * dist_pmf(gw(d + DIST2_COLS + y), x) * f32(w * h);
 }
 
 // ---------------------------------------------------------------------------------------------
-// env.rs. Constant: rgb. Map: width, height, rotate, texels (offset), dist2 (offset).
+// env.rs. ENV_CONSTANT: rgb. ENV_MAP: an ENV_MAP_WORDS record (ENV_*).
 
 fn dir_to_uv(d: vec3<f32>) -> vec2<f32> {
     var u = 0.5 + atan2(d.x, -d.z) * (0.5 / PI);
@@ -285,8 +271,8 @@ fn rot_y(d: vec3<f32>, angle: f32) -> vec3<f32> {
 }
 
 fn env_texel(e: u32, uv: vec2<f32>) -> vec2<u32> {
-    let w = gw(e);
-    let h = gw(e + 1u);
+    let w = gw(e + ENV_WIDTH);
+    let h = gw(e + ENV_HEIGHT);
     let x = min(u32(uv.x * f32(w)), w - 1u);
     let y = min(u32(uv.y * f32(h)), h - 1u);
     return vec2<u32>(x, y);
@@ -295,27 +281,27 @@ fn env_texel(e: u32, uv: vec2<f32>) -> vec2<u32> {
 fn env_eval(dir: vec3<f32>) -> vec3<f32> {
     let kind = hdr(H_ENV_KIND);
     let e = hdr(H_ENV);
-    if (kind == 1u) {
+    if (kind == ENV_CONSTANT) {
         return v3(e);
     }
-    let uv = dir_to_uv(rot_y(dir, -gf(e + 2u)));
+    let uv = dir_to_uv(rot_y(dir, -gf(e + ENV_ROTATE)));
     let xy = env_texel(e, uv);
-    return v3(gw(e + 3u) + 3u * (xy.y * gw(e) + xy.x));
+    return v3(gw(e + ENV_TEXELS) + 3u * (xy.y * gw(e + ENV_WIDTH) + xy.x));
 }
 
 fn env_pdf(dir: vec3<f32>) -> f32 {
     let kind = hdr(H_ENV_KIND);
     let e = hdr(H_ENV);
-    if (kind == 1u) {
+    if (kind == ENV_CONSTANT) {
         return 1.0 / (4.0 * PI);
     }
-    let uv = dir_to_uv(rot_y(dir, -gf(e + 2u)));
+    let uv = dir_to_uv(rot_y(dir, -gf(e + ENV_ROTATE)));
     let xy = env_texel(e, uv);
     let st = sin(PI * uv.y);
     if (st <= 0.0) {
         return 0.0;
     }
-    return dist2_pdf_cell(gw(e + 4u), xy.x, xy.y) / (2.0 * PI * PI * st);
+    return dist2_pdf_cell(gw(e + ENV_DIST), xy.x, xy.y) / (2.0 * PI * PI * st);
 }
 
 struct EnvSample {
@@ -327,11 +313,11 @@ struct EnvSample {
 fn env_sample(u1: f32, u2: f32) -> EnvSample {
     let kind = hdr(H_ENV_KIND);
     let e = hdr(H_ENV);
-    if (kind == 1u) {
+    if (kind == ENV_CONSTANT) {
         return EnvSample(uniform_sphere(u1, u2), v3(e), 1.0 / (4.0 * PI));
     }
-    let s = dist2_sample(gw(e + 4u), u1, u2);
-    let d = rot_y(uv_to_dir(s.uv.x, s.uv.y), gf(e + 2u));
+    let s = dist2_sample(gw(e + ENV_DIST), u1, u2);
+    let d = rot_y(uv_to_dir(s.uv.x, s.uv.y), gf(e + ENV_ROTATE));
     return EnvSample(d, env_eval(d), env_pdf(d));
 }
 

@@ -4,8 +4,6 @@ use super::GpuContext;
 use crate::error::Result;
 use wgpu::util::DeviceExt;
 
-const EXACT_TEST_WGSL: &str = include_str!("../../kernels/exact_test.wgsl");
-
 /// The CPU path's fallback edge function: `a·b − c·d` in `f64`, rounded to `f32`
 /// (`src/bvh/triangle.rs`).
 pub fn edge_reference(a: f32, b: f32, c: f32, d: f32) -> f32 {
@@ -17,7 +15,7 @@ pub fn edge_exact_gpu(ctx: &GpuContext, cases: &[[f32; 4]]) -> Result<Vec<f32>> 
     if cases.is_empty() {
         return Ok(Vec::new());
     }
-    let groups = (cases.len() as u32).div_ceil(super::trace::WORKGROUP);
+    let groups = (cases.len() as u32).div_ceil(super::layout::WORKGROUP);
     if cases.len() > u32::MAX as usize || groups > ctx.limits.max_compute_workgroups_per_dimension {
         return Err(crate::Error::new(
             crate::ErrorKind::Usage,
@@ -31,7 +29,7 @@ pub fn edge_exact_gpu(ctx: &GpuContext, cases: &[[f32; 4]]) -> Result<Vec<f32>> 
             label: Some("exact test"),
             entries: &[entry(0, true), entry(1, false)],
         });
-    let src = format!("{}\n{}", super::trace::BVH_WGSL[0], EXACT_TEST_WGSL);
+    let src = super::layout::module_source(super::layout::kernels::EXACT_TEST_MODULE);
     let pipeline = ctx.compute_pipeline("exact_test", &src, "exact_main", &layout, &[])?;
     let input = ctx
         .device

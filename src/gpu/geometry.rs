@@ -1,24 +1,19 @@
 //! The scene on the device: one space of `u32` words (mesh records, CWBVH nodes with the exact
-//! child boxes the CPU traverses, leaf-ordered triangle corners, the top level, instances) split into up to [`GEO_CHUNKS`] storage
-//! bindings, so that a scene larger than one binding (128 MiB on lavapipe) still works.
-//! Word `i` is word `i & (2^shift − 1)` of chunk `i >> shift`; see `kernels/bvh.wgsl`.
+//! child boxes the CPU traverses, leaf-ordered triangle corners, the top level, instances; laid
+//! out in [`super::layout`]) split into up to [`GEO_CHUNKS`] storage bindings, so that a scene
+//! larger than one binding (128 MiB on lavapipe) still works. Word `i` is word
+//! `i & (2^shift − 1)` of chunk `i >> shift`; see `kernels/bvh.wgsl`.
 
 use crate::bvh::mesh::WideBoxes;
 use crate::bvh::{MeshBvh, SceneBvh};
 use crate::error::{Error, ErrorKind, Result};
-use obvhs::cwbvh::node::CwBvhNode;
 use wgpu::util::DeviceExt;
 
+use super::layout::{
+    GEO_CHUNKS, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BOX_OFF, MESH_NODE_COUNT,
+    MESH_NODE_OFF, MESH_TRI_COUNT, MESH_VERT_OFF, MESH_WORDS,
+};
 use super::GpuContext;
-
-/// Number of storage bindings the geometry may be split into.
-pub const GEO_CHUNKS: usize = 8;
-/// Words per CWBVH node (obvhs's 80-byte `CwBvhNode`).
-pub const NODE_WORDS: usize = 20;
-/// Words per instance record.
-pub const INSTANCE_WORDS: usize = 16;
-
-const _: () = assert!(std::mem::size_of::<CwBvhNode>() == NODE_WORDS * 4);
 
 /// The words of a scene and where its parts start.
 #[derive(Clone, Debug, Default)]
@@ -27,8 +22,7 @@ pub struct PackedScene {
     pub words: Vec<u32>,
     /// 0: one mesh (record 0, world space); 1: instances under a top level.
     pub mode: u32,
-    /// Word offset of the mesh records ([`MESH_WORDS`] words: node offset, node count, vertex
-    /// offset, triangle count, box offset).
+    /// Word offset of the mesh records ([`MESH_WORDS`] words each, `MESH_*`).
     pub mesh_off: u32,
     /// Word offset of the top-level nodes.
     pub top_node_off: u32,
@@ -50,11 +44,6 @@ fn offset(words: &[u32]) -> Result<u32> {
         )
     })
 }
-
-/// Words per node of exact child boxes (`WideBoxes`).
-pub const BOX_WORDS: usize = 48;
-/// Words per mesh record.
-pub const MESH_WORDS: usize = 8;
 
 fn push_boxes(words: &mut Vec<u32>, boxes: &[WideBoxes]) {
     for b in boxes {
@@ -84,11 +73,11 @@ fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &MeshBvh) -> Result<()> {
         }
     }
     offset(words)?;
-    words[rec] = node_off;
-    words[rec + 1] = m.cwbvh.nodes.len() as u32;
-    words[rec + 2] = vert_off;
-    words[rec + 3] = m.tri_verts.len() as u32;
-    words[rec + 4] = box_off;
+    words[rec + MESH_NODE_OFF] = node_off;
+    words[rec + MESH_NODE_COUNT] = m.cwbvh.nodes.len() as u32;
+    words[rec + MESH_VERT_OFF] = vert_off;
+    words[rec + MESH_TRI_COUNT] = m.tri_verts.len() as u32;
+    words[rec + MESH_BOX_OFF] = box_off;
     Ok(())
 }
 
@@ -125,15 +114,19 @@ impl PackedScene {
         let inst_off = offset(&words)?;
         for inst in &s.instances {
             let m = inst.world_to_object;
-            words.extend_from_slice(&[inst.mesh, 0, 0, 0]);
-            for c in [
+            let mut rec = [0u32; INSTANCE_WORDS];
+            rec[INST_MESH] = inst.mesh;
+            let cols = [
                 m.matrix3.x_axis,
                 m.matrix3.y_axis,
                 m.matrix3.z_axis,
                 m.translation,
-            ] {
-                words.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits()]);
+            ];
+            for (i, c) in cols.iter().enumerate() {
+                let at = INST_XFORM + 3 * i;
+                rec[at..at + 3].copy_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits()]);
             }
+            words.extend_from_slice(&rec);
         }
         offset(&words)?;
         Ok(PackedScene {

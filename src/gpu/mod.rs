@@ -7,7 +7,8 @@
 //! `t`. The CPU's `f64` re-evaluation of zero edge functions is emulated exactly with integer
 //! arithmetic (`kernels/exact.wgsl`).
 //!
-//! Modules: [`device`] (adapter choice, device, error scopes), [`geometry`] (the scene as
+//! Modules: [`device`] (adapter choice, device, error scopes), [`layout`] (every word layout
+//! shared with the kernels, defined once; the WGSL prelude), [`geometry`] (the scene as
 //! words over several storage bindings), [`trace`] (closest hits, `trace --backend gpu`),
 //! [`render`] (the path tracer, `render --backend gpu`), [`exact`] (the exact edge function,
 //! for tests), [`cli`] (command-line pieces).
@@ -15,6 +16,7 @@
 pub mod device;
 pub mod exact;
 pub mod geometry;
+pub mod layout;
 pub mod render;
 pub mod trace;
 

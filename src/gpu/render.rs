@@ -2,15 +2,10 @@
 //! sample dimensions, same sampling and materials), one invocation per pixel, samples added in
 //! sample order.
 
-use super::trace::{layout, BVH_WGSL};
+use super::layout::*;
+use super::trace::layout;
 use super::GpuContext;
 use crate::error::Result;
-
-const PATH_WGSL: [&str; 3] = [
-    include_str!("../../kernels/sampling.wgsl"),
-    include_str!("../../kernels/material.wgsl"),
-    include_str!("../../kernels/path.wgsl"),
-];
 
 /// The path-tracing kernels.
 pub struct PathKernels {
@@ -26,9 +21,7 @@ impl PathKernels {
     /// Compiles the kernels for geometry in `geo_used` chunks.
     pub fn new(ctx: &GpuContext, geo_used: usize) -> Result<PathKernels> {
         let layout = layout(ctx, &[false, false]);
-        let src = [BVH_WGSL.as_slice(), PATH_WGSL.as_slice()]
-            .concat()
-            .join("\n");
+        let src = module_source(kernels::PATH_MODULE);
         let c = [("GEO_USED", geo_used as f64)];
         let path = ctx.compute_pipeline("path", &src, "path_main", &layout, &c)?;
         let primary = ctx.compute_pipeline("primary", &src, "primary_main", &layout, &c)?;
@@ -50,12 +43,6 @@ use crate::render::sampling::{Distribution1D, Distribution2D};
 use crate::render::{Film, World};
 use wgpu::util::DeviceExt;
 
-/// Header words of the render block (see `kernels/path.wgsl`).
-const HEADER_WORDS: usize = 40;
-/// Floats per pixel accumulator.
-const ACC: usize = 12;
-/// Words per primary-hit record.
-const PRIM: usize = 8;
 /// Pixels per accumulator chunk.
 const CHUNK_PIXELS: usize = 1 << 14;
 
@@ -67,6 +54,11 @@ fn push_v3(w: &mut Vec<u32>, v: glam::Vec3) {
     w.extend_from_slice(&[f(v.x), f(v.y), f(v.z)]);
 }
 
+/// Writes `v` at word `at` of a record.
+fn put_v3(rec: &mut [u32], at: usize, v: glam::Vec3) {
+    rec[at..at + 3].copy_from_slice(&[f(v.x), f(v.y), f(v.z)]);
+}
+
 fn here(w: &[u32]) -> Result<u32> {
     u32::try_from(w.len())
         .map_err(|_| Error::new(ErrorKind::Gpu, "scene too large for the GPU backend"))
@@ -74,8 +66,10 @@ fn here(w: &[u32]) -> Result<u32> {
 
 fn push_dist(w: &mut Vec<u32>, d: &Distribution1D) -> Result<u32> {
     let at = here(w)?;
-    w.push(d.pmf.len() as u32);
-    w.push(f(d.total));
+    let mut head = [0u32; DIST_CDF];
+    head[DIST_N] = d.pmf.len() as u32;
+    head[DIST_TOTAL] = f(d.total);
+    w.extend_from_slice(&head);
     w.extend(d.cdf.iter().map(|&x| f(x)));
     w.extend(d.pmf.iter().map(|&x| f(x)));
     Ok(at)
@@ -89,7 +83,11 @@ fn push_dist2(w: &mut Vec<u32>, d: &Distribution2D) -> Result<u32> {
         .map(|c| push_dist(w, c))
         .collect::<Result<_>>()?;
     let at = here(w)?;
-    w.extend_from_slice(&[d.width as u32, d.height as u32, rows]);
+    let mut head = [0u32; DIST2_COLS];
+    head[DIST2_WIDTH] = d.width as u32;
+    head[DIST2_HEIGHT] = d.height as u32;
+    head[DIST2_ROWS] = rows;
+    w.extend_from_slice(&head);
     w.extend_from_slice(&cols);
     Ok(at)
 }
@@ -105,42 +103,42 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
     let mut hdr = [0u32; HEADER_WORDS];
     let st = &world.settings;
     let cam = &world.camera;
-    hdr[0] = cam.width;
-    hdr[1] = cam.height;
-    hdr[2] = st.spp;
-    hdr[3] = st.max_depth;
-    hdr[4] = st.seed;
+    hdr[H_WIDTH] = cam.width;
+    hdr[H_HEIGHT] = cam.height;
+    hdr[H_SPP] = st.spp;
+    hdr[H_MAX_DEPTH] = st.max_depth;
+    hdr[H_SEED] = st.seed;
     // Materials.
-    hdr[5] = here(w)?;
+    hdr[H_MAT] = here(w)?;
     for m in &world.materials {
-        let mut rec = [0u32; 12];
+        let mut rec = [0u32; MAT_WORDS];
         match *m {
             Material::Diffuse { albedo } => {
-                rec[0] = 0;
-                rec[1..4].copy_from_slice(&[f(albedo.x), f(albedo.y), f(albedo.z)]);
+                rec[MAT_KIND] = M_DIFFUSE;
+                put_v3(&mut rec, MAT_COLOR, albedo);
             }
             Material::Conductor { fresnel, alpha } => {
                 match fresnel {
                     Fresnel::Conductor { eta, k } => {
-                        rec[0] = 1;
-                        rec[1..4].copy_from_slice(&[f(eta.x), f(eta.y), f(eta.z)]);
-                        rec[4..7].copy_from_slice(&[f(k.x), f(k.y), f(k.z)]);
+                        rec[MAT_KIND] = M_CONDUCTOR;
+                        put_v3(&mut rec, MAT_COLOR, eta);
+                        put_v3(&mut rec, MAT_K, k);
                     }
                     Fresnel::Schlick { f0 } => {
-                        rec[0] = 2;
-                        rec[1..4].copy_from_slice(&[f(f0.x), f(f0.y), f(f0.z)]);
+                        rec[MAT_KIND] = M_SCHLICK;
+                        put_v3(&mut rec, MAT_COLOR, f0);
                     }
                 }
-                rec[7] = f(alpha);
+                rec[MAT_ALPHA] = f(alpha);
             }
             Material::Dielectric { ior, alpha } => {
-                rec[0] = 3;
-                rec[1] = f(ior);
-                rec[7] = f(alpha);
+                rec[MAT_KIND] = M_DIELECTRIC;
+                rec[MAT_COLOR] = f(ior);
+                rec[MAT_ALPHA] = f(alpha);
             }
             Material::Emissive { radiance } => {
-                rec[0] = 4;
-                rec[1..4].copy_from_slice(&[f(radiance.x), f(radiance.y), f(radiance.z)]);
+                rec[MAT_KIND] = M_EMISSIVE;
+                put_v3(&mut rec, MAT_COLOR, radiance);
             }
         }
         w.extend_from_slice(&rec);
@@ -159,19 +157,21 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
     {
         return Err(Error::new(ErrorKind::Gpu, "instance material out of range"));
     }
-    hdr[6] = here(w)?;
+    hdr[H_INST_MAT] = here(w)?;
     w.extend_from_slice(&world.instance_material);
     // Quad lights.
     let l = &world.lights;
-    hdr[7] = l.quads.len() as u32;
-    hdr[8] = here(w)?;
+    hdr[H_NQUADS] = l.quads.len() as u32;
+    hdr[H_QUADS] = here(w)?;
     for q in &l.quads {
-        push_v3(w, q.corner);
-        push_v3(w, q.edge1);
-        push_v3(w, q.edge2);
-        push_v3(w, q.normal);
-        w.push(f(q.area));
-        push_v3(w, q.radiance);
+        let mut rec = [0u32; QUAD_WORDS];
+        put_v3(&mut rec, QUAD_CORNER, q.corner);
+        put_v3(&mut rec, QUAD_EDGE1, q.edge1);
+        put_v3(&mut rec, QUAD_EDGE2, q.edge2);
+        put_v3(&mut rec, QUAD_NORMAL, q.normal);
+        rec[QUAD_AREA] = f(q.area);
+        put_v3(&mut rec, QUAD_RADIANCE, q.radiance);
+        w.extend_from_slice(&rec);
     }
     // Mesh lights: triangles and distributions first, then the records.
     let mut recs = Vec::new();
@@ -185,61 +185,62 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
         let dist = push_dist(w, &m.dist)?;
         recs.push((m, tris, dist));
     }
-    hdr[9] = l.meshes.len() as u32;
-    hdr[10] = here(w)?;
+    hdr[H_NMESHL] = l.meshes.len() as u32;
+    hdr[H_MESHL] = here(w)?;
     for (m, tris, dist) in recs {
-        w.extend_from_slice(&[m.instance, f(m.area)]);
-        push_v3(w, m.radiance);
-        w.extend_from_slice(&[m.triangles.len() as u32, tris, dist]);
+        let mut rec = [0u32; MESHL_WORDS];
+        rec[MESHL_INSTANCE] = m.instance;
+        rec[MESHL_AREA] = f(m.area);
+        put_v3(&mut rec, MESHL_RADIANCE, m.radiance);
+        rec[MESHL_TRI_COUNT] = m.triangles.len() as u32;
+        rec[MESHL_TRIS] = tris;
+        rec[MESHL_DIST] = dist;
+        w.extend_from_slice(&rec);
     }
-    hdr[11] = here(w)?;
+    hdr[H_INST_LIGHT] = here(w)?;
     for i in 0..ninst {
-        w.push(
-            l.instance_light
-                .get(i)
-                .copied()
-                .flatten()
-                .unwrap_or(u32::MAX),
-        );
+        w.push(l.instance_light.get(i).copied().flatten().unwrap_or(NONE));
     }
     // Environment.
     match &l.env {
-        None => hdr[12] = 0,
+        None => hdr[H_ENV_KIND] = ENV_NONE,
         Some(Environment::Constant(c)) => {
-            hdr[12] = 1;
-            hdr[13] = here(w)?;
+            hdr[H_ENV_KIND] = ENV_CONSTANT;
+            hdr[H_ENV] = here(w)?;
             push_v3(w, *c);
         }
         Some(Environment::Map { map, rotate }) => {
-            hdr[12] = 2;
+            hdr[H_ENV_KIND] = ENV_MAP;
             let texels = here(w)?;
             for t in &map.texels {
                 push_v3(w, *t);
             }
             let dist = push_dist2(w, &map.dist)?;
-            hdr[13] = here(w)?;
-            w.extend_from_slice(&[
-                map.width as u32,
-                map.height as u32,
-                f(*rotate),
-                texels,
-                dist,
-            ]);
+            hdr[H_ENV] = here(w)?;
+            let mut rec = [0u32; ENV_MAP_WORDS];
+            rec[ENV_WIDTH] = map.width as u32;
+            rec[ENV_HEIGHT] = map.height as u32;
+            rec[ENV_ROTATE] = f(*rotate);
+            rec[ENV_TEXELS] = texels;
+            rec[ENV_DIST] = dist;
+            w.extend_from_slice(&rec);
         }
     }
-    hdr[14] = push_dist(w, &l.select)?;
+    hdr[H_SELECT] = push_dist(w, &l.select)?;
     // Instance transforms: object-to-world (hit points), normal matrix (normals).
-    hdr[15] = here(w)?;
+    hdr[H_INST_XF] = here(w)?;
     for (i, xf) in world.transforms.iter().enumerate() {
+        let mut rec = [0u32; XF_WORDS];
         let m = xf.matrix3;
-        for c in [m.x_axis, m.y_axis, m.z_axis, xf.translation] {
-            w.extend_from_slice(&[f(c.x), f(c.y), f(c.z)]);
+        for (j, c) in [m.x_axis, m.y_axis, m.z_axis].into_iter().enumerate() {
+            put_v3(&mut rec, XF_MATRIX + 3 * j, c.into());
         }
+        put_v3(&mut rec, XF_TRANSLATION, xf.translation.into());
         let n = world.scene.instances[i].normal_matrix;
-        for c in [n.x_axis, n.y_axis, n.z_axis] {
-            w.extend_from_slice(&[f(c.x), f(c.y), f(c.z)]);
+        for (j, c) in [n.x_axis, n.y_axis, n.z_axis].into_iter().enumerate() {
+            put_v3(&mut rec, XF_NORMAL + 3 * j, c.into());
         }
-        w.extend_from_slice(&[0, 0, 0]);
+        w.extend_from_slice(&rec);
     }
     // Per mesh: the limit normals at the corners of each leaf-ordered triangle.
     let mut normals = Vec::new();
@@ -252,19 +253,21 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
             }
         }
     }
-    hdr[16] = here(w)?;
+    hdr[H_MESH_EXTRA] = here(w)?;
     for n in normals {
-        w.extend_from_slice(&[n, 0, 0, 0]);
+        let mut rec = [0u32; MESH_EXTRA_WORDS];
+        rec[MX_NORMALS] = n;
+        w.extend_from_slice(&rec);
     }
     // Camera.
-    let mut c = 20;
-    for v in [cam.position, cam.forward, cam.right, cam.up] {
-        hdr[c..c + 3].copy_from_slice(&[f(v.x), f(v.y), f(v.z)]);
-        c += 3;
-    }
-    hdr[32] = f(cam.tan_half_fov);
-    hdr[33] = f(cam.aperture);
-    hdr[34] = f(cam.focus_distance);
+    let c = &mut hdr[H_CAMERA..H_CAMERA + CAM_WORDS];
+    put_v3(c, CAM_POSITION, cam.position);
+    put_v3(c, CAM_FORWARD, cam.forward);
+    put_v3(c, CAM_RIGHT, cam.right);
+    put_v3(c, CAM_UP, cam.up);
+    c[CAM_TAN_HALF_FOV] = f(cam.tan_half_fov);
+    c[CAM_APERTURE] = f(cam.aperture);
+    c[CAM_FOCUS_DISTANCE] = f(cam.focus_distance);
     here(w)?;
     w[r..r + HEADER_WORDS].copy_from_slice(&hdr);
     Ok((packed, r as u32))
@@ -321,8 +324,8 @@ impl<'a> GpuRenderer<'a> {
         mut next_range: impl FnMut(f64) -> Option<(u32, u32)>,
     ) -> Result<(Vec<f32>, Vec<u32>)> {
         let ctx = self.ctx;
-        let acc_size = (n as usize * ACC * 4) as u64;
-        let prim_size = (n as usize * PRIM * 4) as u64;
+        let acc_size = (n as usize * ACC_WORDS * 4) as u64;
+        let prim_size = (n as usize * HIT_WORDS * 4) as u64;
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let acc = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulators"),
@@ -363,7 +366,7 @@ impl<'a> GpuRenderer<'a> {
                 });
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &bg, &[]);
-                pass.dispatch_workgroups(n.div_ceil(super::trace::WORKGROUP), 1, 1);
+                pass.dispatch_workgroups(n.div_ceil(WORKGROUP), 1, 1);
             }
             let t0 = std::time::Instant::now();
             ctx.queue.submit([enc.finish()]);
@@ -393,8 +396,9 @@ impl<'a> GpuRenderer<'a> {
         ))
     }
 
-    /// The centre ray of every pixel (the CPU renderer's AOV ray), row by row: status 0 miss,
-    /// 1 mesh hit, 3 a quad light in front of the mesh.
+    /// The centre ray of every pixel (the CPU renderer's AOV ray), row by row: status
+    /// [`STATUS_MISS`], [`STATUS_HIT`] or [`STATUS_QUAD_LIGHT`] (a quad light in front of the
+    /// mesh).
     pub fn primary(&self) -> Result<Vec<RawHit>> {
         let npix = self.width as usize * self.height as usize;
         let mut out = Vec::with_capacity(npix);
@@ -405,19 +409,15 @@ impl<'a> GpuRenderer<'a> {
             let (_, prim) = self.run(&self.kernels.primary, p0 as u32, n as u32, |_| {
                 std::mem::take(&mut once).then_some((0, 0))
             })?;
-            for r in prim.chunks_exact(PRIM) {
-                if r[0] == 2 {
+            for r in prim.chunks_exact(HIT_WORDS) {
+                let h = RawHit {
+                    iterations: 0,
+                    ..RawHit::from_words(r)
+                };
+                if h.status == STATUS_OVERFLOW {
                     return Err(gpu_err("a primary ray exceeded the GPU traversal bound"));
                 }
-                out.push(RawHit {
-                    status: r[0],
-                    instance: r[1],
-                    leaf: r[2],
-                    t: f32::from_bits(r[3]),
-                    b1: f32::from_bits(r[4]),
-                    b2: f32::from_bits(r[5]),
-                    iterations: 0,
-                });
+                out.push(h);
             }
             p0 += n;
         }
@@ -457,18 +457,24 @@ impl<'a> GpuRenderer<'a> {
                 Some(r)
             })?;
             let inv = 1.0 / spp.max(1) as f32;
-            for (i, a) in acc.chunks_exact(ACC).enumerate() {
-                if a[10] != 0.0 {
+            for (i, a) in acc.chunks_exact(ACC_WORDS).enumerate() {
+                if a[ACC_OVERFLOW] != 0.0 {
                     return Err(gpu_err("a path exceeded the GPU traversal bound"));
                 }
+                let (rgb, n, al) = (ACC_RGB, ACC_NORMAL, ACC_ALBEDO);
                 let mut v = PixelValue {
-                    rgba: [a[0] * inv, a[1] * inv, a[2] * inv, a[3] * inv],
-                    normal: [a[4] * inv, a[5] * inv, a[6] * inv],
-                    albedo: [a[7] * inv, a[8] * inv, a[9] * inv],
+                    rgba: [
+                        a[rgb] * inv,
+                        a[rgb + 1] * inv,
+                        a[rgb + 2] * inv,
+                        a[ACC_ALPHA] * inv,
+                    ],
+                    normal: [a[n] * inv, a[n + 1] * inv, a[n + 2] * inv],
+                    albedo: [a[al] * inv, a[al + 1] * inv, a[al + 2] * inv],
                     ..PixelValue::default()
                 };
                 let ph = &prim[p0 + i];
-                if ph.status == 1 {
+                if ph.status == STATUS_HIT {
                     let hit = world
                         .scene
                         .hit_record(ph.instance, ph.leaf as usize, ph.t, ph.b1, ph.b2)

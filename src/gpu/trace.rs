@@ -3,59 +3,18 @@
 //! like Rust's `f32` (lavapipe). The kernel returns `(instance, leaf, t, b1, b2)`; the hit
 //! record is completed on the host by the same code as the CPU path.
 
-use super::geometry::{GpuGeometry, PackedScene, GEO_CHUNKS};
+use super::geometry::{GpuGeometry, PackedScene};
+use super::layout::{
+    kernels, module_source, GEO_CHUNKS, HIT_B1, HIT_B2, HIT_INSTANCE, HIT_ITERS, HIT_LEAF,
+    HIT_STATUS, HIT_T, HIT_WORDS, RAY_DIR, RAY_TMAX, RAY_TMIN, RAY_WORDS, STATUS_HIT,
+    STATUS_OVERFLOW,
+};
 use super::GpuContext;
 use crate::bvh::{Hit, MeshBvh, Ray, SceneBvh, SceneHit};
 use crate::error::{Error, ErrorKind, Result};
 use wgpu::util::DeviceExt;
 
-/// The kernel sources, in inclusion order.
-pub const BVH_WGSL: [&str; 2] = [
-    include_str!("../../kernels/exact.wgsl"),
-    include_str!("../../kernels/bvh.wgsl"),
-];
-const TRACE_WGSL: &str = include_str!("../../kernels/trace.wgsl");
-
-/// Workgroup size of the kernels.
-pub const WORKGROUP: u32 = 64;
-
-/// The uniform block of `kernels/bvh.wgsl` (`struct Params`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Params {
-    /// log2 of the words per geometry chunk.
-    pub chunk_shift: u32,
-    /// 0: one mesh; 1: instances.
-    pub mode: u32,
-    /// See [`PackedScene::mesh_off`].
-    pub mesh_off: u32,
-    /// See [`PackedScene::top_node_off`].
-    pub top_node_off: u32,
-    /// See [`PackedScene::top_node_count`].
-    pub top_node_count: u32,
-    /// See [`PackedScene::top_index_off`].
-    pub top_index_off: u32,
-    /// See [`PackedScene::inst_off`].
-    pub inst_off: u32,
-    /// See [`PackedScene::top_box_off`].
-    pub top_box_off: u32,
-    /// Rays (or work items) in this dispatch.
-    pub ray_count: u32,
-    /// Traversal loop iterations allowed per ray.
-    pub max_iter: u32,
-    /// `1 + 2γ(3)` of the box test, as the CPU computes it.
-    pub box_scale: f32,
-    /// Kernel-specific.
-    pub user0: u32,
-    /// Kernel-specific.
-    pub user1: u32,
-    /// Kernel-specific.
-    pub user2: u32,
-    /// Kernel-specific.
-    pub user3: u32,
-    /// Must be 0: the kernels' opaque zero (`nf` in `kernels/bvh.wgsl`).
-    pub user4: u32,
-}
+pub use super::layout::{Params, WORKGROUP};
 
 impl Params {
     /// The geometry part of the parameters.
@@ -178,7 +137,9 @@ pub fn bind_group(
 /// What the kernel found for one ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RawHit {
-    /// 0 miss, 1 hit, 2 traversal bound exceeded.
+    /// [`STATUS_MISS`](super::layout::STATUS_MISS), [`STATUS_HIT`] or [`STATUS_OVERFLOW`]
+    /// (traversal bound exceeded); primary hits also
+    /// [`STATUS_QUAD_LIGHT`](super::layout::STATUS_QUAD_LIGHT).
     pub status: u32,
     /// Instance (0 for a single mesh).
     pub instance: u32,
@@ -192,6 +153,21 @@ pub struct RawHit {
     pub b2: f32,
     /// Traversal loop iterations used.
     pub iterations: u32,
+}
+
+impl RawHit {
+    /// The hit in a record of [`HIT_WORDS`] words (trace results, primary hits).
+    pub fn from_words(h: &[u32]) -> RawHit {
+        RawHit {
+            status: h[HIT_STATUS],
+            instance: h[HIT_INSTANCE],
+            leaf: h[HIT_LEAF],
+            t: f32::from_bits(h[HIT_T]),
+            b1: f32::from_bits(h[HIT_B1]),
+            b2: f32::from_bits(h[HIT_B2]),
+            iterations: h[HIT_ITERS],
+        }
+    }
 }
 
 /// A scene on the device with the closest-hit kernel.
@@ -209,7 +185,7 @@ impl<'a> GpuTracer<'a> {
     pub fn new(ctx: &'a GpuContext, packed: PackedScene, opts: TraceOptions) -> Result<Self> {
         let geo = GpuGeometry::upload(ctx, &packed, opts.max_chunk_words)?;
         let layout = layout(ctx, &[true, false]);
-        let src = format!("{}\n{}\n{}", BVH_WGSL[0], BVH_WGSL[1], TRACE_WGSL);
+        let src = module_source(kernels::TRACE_MODULE);
         let pipeline = ctx.compute_pipeline(
             "trace",
             &src,
@@ -237,7 +213,8 @@ impl<'a> GpuTracer<'a> {
         let ctx = self.ctx;
         let tile = self.opts.tile_rays.clamp(WORKGROUP as usize, 1 << 22);
         let tile = tile.min(rays.len().max(1));
-        let ray_bytes = (tile * 32) as u64;
+        let ray_bytes = (tile * RAY_WORDS * 4) as u64;
+        let hit_bytes = (tile * HIT_WORDS * 4) as u64;
         let ray_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("rays"),
             size: ray_bytes,
@@ -246,13 +223,13 @@ impl<'a> GpuTracer<'a> {
         });
         let hit_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hits"),
-            size: ray_bytes,
+            size: hit_bytes,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         let read_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hits readback"),
-            size: ray_bytes,
+            size: hit_bytes,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -280,18 +257,12 @@ impl<'a> GpuTracer<'a> {
             let part = &rays[done..(done + n).min(rays.len())];
             done += part.len();
             let t0 = std::time::Instant::now();
-            let mut data = Vec::with_capacity(part.len() * 8);
-            for r in part {
-                data.extend_from_slice(&[
-                    r.origin[0],
-                    r.origin[1],
-                    r.origin[2],
-                    r.tmin,
-                    r.dir[0],
-                    r.dir[1],
-                    r.dir[2],
-                    r.tmax,
-                ]);
+            let mut data = vec![0f32; part.len() * RAY_WORDS];
+            for (r, w) in part.iter().zip(data.chunks_exact_mut(RAY_WORDS)) {
+                w[..3].copy_from_slice(&r.origin);
+                w[RAY_TMIN] = r.tmin;
+                w[RAY_DIR..RAY_DIR + 3].copy_from_slice(&r.dir);
+                w[RAY_TMAX] = r.tmax;
             }
             ctx.queue
                 .write_buffer(&ray_buf, 0, bytemuck::cast_slice(&data));
@@ -310,23 +281,13 @@ impl<'a> GpuTracer<'a> {
                 pass.set_bind_group(0, &bg, &[]);
                 pass.dispatch_workgroups((part.len() as u32).div_ceil(WORKGROUP), 1, 1);
             }
-            let size = (part.len() * 32) as u64;
+            let size = (part.len() * HIT_WORDS * 4) as u64;
             enc.copy_buffer_to_buffer(&hit_buf, 0, &read_buf, 0, size);
             ctx.queue.submit([enc.finish()]);
             let bytes = ctx.read_buffer(&read_buf, size)?;
             n = next_tile(part.len(), t0.elapsed().as_secs_f64(), tile);
             let w: &[u32] = bytemuck::cast_slice(&bytes);
-            for h in w.chunks_exact(8) {
-                out.push(RawHit {
-                    status: h[0],
-                    instance: h[1],
-                    leaf: h[2],
-                    t: f32::from_bits(h[3]),
-                    b1: f32::from_bits(h[4]),
-                    b2: f32::from_bits(h[5]),
-                    iterations: h[6],
-                });
-            }
+            out.extend(w.chunks_exact(HIT_WORDS).map(RawHit::from_words));
         }
         Ok(out)
     }
@@ -353,7 +314,7 @@ fn overflow_error(n: usize) -> Error {
 
 /// An error if any ray of `raw` overflowed the traversal bound.
 fn check_overflow(raw: &[RawHit]) -> Result<()> {
-    match raw.iter().filter(|h| h.status == 2).count() {
+    match raw.iter().filter(|h| h.status == STATUS_OVERFLOW).count() {
         0 => Ok(()),
         n => Err(overflow_error(n)),
     }
@@ -371,7 +332,7 @@ pub fn trace_mesh(
     check_overflow(&raw)?;
     Ok(raw
         .iter()
-        .map(|h| (h.status == 1).then(|| bvh.hit(h.leaf as usize, h.t, h.b1, h.b2)))
+        .map(|h| (h.status == STATUS_HIT).then(|| bvh.hit(h.leaf as usize, h.t, h.b1, h.b2)))
         .collect())
 }
 
@@ -388,7 +349,8 @@ pub fn trace_scene(
     Ok(raw
         .iter()
         .map(|h| {
-            (h.status == 1).then(|| scene.hit_record(h.instance, h.leaf as usize, h.t, h.b1, h.b2))
+            (h.status == STATUS_HIT)
+                .then(|| scene.hit_record(h.instance, h.leaf as usize, h.t, h.b1, h.b2))
         })
         .collect())
 }
