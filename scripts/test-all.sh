@@ -22,3 +22,6 @@ python3 -m pip install --quiet --disable-pip-version-check OpenEXR
 target/debug/limitray render scenes/default.toml -o target/check-default.exr \
     --res 64x36 --spp 2 --quiet
 python3 scripts/check-exr.py target/check-default.exr
+
+# The Python package (python/, PyO3 + maturin) in a venv under target/, and its pytest suite.
+bash scripts/test-python.sh

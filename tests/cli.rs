@@ -441,8 +441,6 @@ fn refined_cube_matches_hbr_baseline() {
 
 #[test]
 fn eval_and_stats_through_the_cli() {
-    use std::io::Write;
-    use std::process::{Command, Stdio};
     let dir = std::env::temp_dir().join(format!("limitray-cli-eval-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let obj = dir.join("cube.obj");
@@ -452,22 +450,10 @@ fn eval_and_stats_through_the_cli() {
          f 1 2 4 3\nf 3 4 6 5\nf 5 6 8 7\nf 7 8 2 1\nf 2 8 6 4\nf 7 1 3 5\nt crease 2/1 0 1 3\n",
     )
     .unwrap();
-    let bin = env!("CARGO_BIN_EXE_limitray");
-    let mut child = Command::new(bin)
-        .arg("eval")
-        .arg(&obj)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"0 0.5 0.5\n0 0 0.25 0.75\nbad line\n9 0.5 0.5\n0 1 0.5 0.5\n1 0 0\n")
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = common::run_limitray(
+        &[std::ffi::OsStr::new("eval"), obj.as_os_str()],
+        Some(b"0 0.5 0.5\n0 0 0.25 0.75\nbad line\n9 0.5 0.5\n0 1 0.5 0.5\n1 0 0\n"),
+    );
     let stdout = String::from_utf8(out.stdout).unwrap();
     let stderr = String::from_utf8(out.stderr).unwrap();
     let lines: Vec<&str> = stdout.lines().collect();
@@ -495,7 +481,7 @@ fn eval_and_stats_through_the_cli() {
         .collect();
     assert!(c[0].abs() < 1e-12 && c[1] < 0.0 && c[2] > 0.0, "{c:?}");
 
-    let out = Command::new(bin).arg("stats").arg(&obj).output().unwrap();
+    let out = common::run_limitray(&[std::ffi::OsStr::new("stats"), obj.as_os_str()], None);
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["patches_total"].as_u64().unwrap() > 6);

@@ -386,28 +386,17 @@ fn cli_trace_gpu_prints_what_the_cpu_prints() {
     }
     input.push_str("\n1 2 3\n0 0 5 0 0 -1\n");
     let run = |backend: &str| {
-        use std::io::Write;
-        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_limitray"))
-            .args([
+        let out = common::run_limitray(
+            &[
                 "trace",
                 mesh.to_str().unwrap(),
                 "--rate",
                 "4",
                 "--backend",
                 backend,
-            ])
-            .stdin(std::process::Stdio::piped())
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        child
-            .stdin
-            .take()
-            .unwrap()
-            .write_all(input.as_bytes())
-            .unwrap();
-        let out = child.wait_with_output().unwrap();
+            ],
+            Some(input.as_bytes()),
+        );
         (out.status.code(), String::from_utf8(out.stdout).unwrap())
     };
     let (cpu_code, cpu) = run("cpu");
