@@ -5,8 +5,10 @@
 //! `[0, 1]`, encoded with the sRGB transfer function and rounded to 8 bits. Alpha is not
 //! written (the preview is opaque).
 
+use super::output::Output;
 use crate::error::{Error, ErrorKind, Result};
 use crate::render::film::Film;
+use std::io::Write;
 use std::path::Path;
 
 /// The ACES filmic approximation (Narkowicz 2015), clamped to `[0, 1]`.
@@ -31,8 +33,16 @@ pub fn tone_map(x: f32, exposure: f32) -> u8 {
     (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8
 }
 
-/// Writes the film's beauty as a tone-mapped sRGB PNG.
+/// Writes the film's beauty as a tone-mapped sRGB PNG (`-`: standard output), replacing an
+/// existing file only with a complete one.
 pub fn write_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
+    let mut out = Output::create(path)?;
+    write_preview_to(&mut out, film, exposure)?;
+    out.commit()
+}
+
+/// [`write_preview`] into an output opened before the render; the caller commits it.
+pub fn write_preview_to(out: &mut Output, film: &Film, exposure: f32) -> Result<()> {
     let mut buf = Vec::with_capacity(film.pixels.len() * 3);
     for p in &film.pixels {
         for c in 0..3 {
@@ -40,10 +50,9 @@ pub fn write_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
         }
     }
     let img = image::RgbImage::from_raw(film.width, film.height, buf).ok_or_else(|| {
-        Error::new(ErrorKind::Io, "image size mismatch").in_file(path.display().to_string())
+        Error::new(ErrorKind::Io, "image size mismatch").in_file(out.name().to_string())
     })?;
-    img.save_with_format(path, image::ImageFormat::Png)
-        .map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string()))
+    encode_into(out, &img)
 }
 
 /// Colours of patch levels 0, 1, 2, … in [`write_levels_preview`] (the last repeats).
@@ -62,6 +71,13 @@ pub const LEVEL_COLOURS: [[f32; 3]; 8] = [
 /// colour from [`LEVEL_COLOURS`], shaded by the tone-mapped beauty so the shapes stay
 /// readable; misses are black.
 pub fn write_levels_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
+    let mut out = Output::create(path)?;
+    write_levels_preview_to(&mut out, film, exposure)?;
+    out.commit()
+}
+
+/// [`write_levels_preview`] into an output opened before the render; the caller commits it.
+pub fn write_levels_preview_to(out: &mut Output, film: &Film, exposure: f32) -> Result<()> {
     let mut buf = Vec::with_capacity(film.pixels.len() * 3);
     for p in &film.pixels {
         if p.level < 0.0 {
@@ -76,10 +92,19 @@ pub fn write_levels_preview(path: &Path, film: &Film, exposure: f32) -> Result<(
         }
     }
     let img = image::RgbImage::from_raw(film.width, film.height, buf).ok_or_else(|| {
-        Error::new(ErrorKind::Io, "image size mismatch").in_file(path.display().to_string())
+        Error::new(ErrorKind::Io, "image size mismatch").in_file(out.name().to_string())
     })?;
-    img.save_with_format(path, image::ImageFormat::Png)
-        .map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string()))
+    encode_into(out, &img)
+}
+
+/// Encodes a PNG in memory and writes it to `out`.
+fn encode_into(out: &mut Output, img: &image::RgbImage) -> Result<()> {
+    let err = |e: String| Error::new(ErrorKind::Io, e).in_file(out.name().to_string());
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| err(e.to_string()))?;
+    let r = out.write_all(bytes.get_ref());
+    r.map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(out.name().to_string()))
 }
 
 #[cfg(test)]

@@ -149,7 +149,26 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
     };
     let raw: RawFile = toml::from_str(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
-        src.err(span, e.message().trim().to_string())
+        let message = e.message().trim().to_string();
+        let mut err = src.err(span.clone(), message.clone());
+        // A missing key is reported at its table: name the key itself.
+        if let Some(field) = message
+            .strip_prefix("missing field `")
+            .and_then(|r| r.split('`').next())
+        {
+            // An empty span is the whole document (a top-level key).
+            let table = if span.is_empty() {
+                String::new()
+            } else {
+                src.key_at(span.start)
+            };
+            err.element = Some(if table.is_empty() {
+                format!("key '{field}'")
+            } else {
+                format!("key '{table}.{field}'")
+            });
+        }
+        err
     })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
 
@@ -195,6 +214,12 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
         let x = Vec3::from(*v.get_ref());
         if !finite3(x) {
             return Err(src.err(v.span(), "components must be finite"));
+        }
+        if !crate::numeric::in_range(x.as_dvec3().into()) {
+            return Err(src.err(
+                v.span(),
+                format!("out of range ({})", crate::numeric::contract()),
+            ));
         }
         Ok(x)
     };
@@ -478,7 +503,30 @@ radiance = 0.2
         let e = err("[camera\n");
         assert!(e.starts_with("s.toml:1:"), "{e}");
         let e = err("[render]\nwidth = 3\n");
-        assert!(e.contains("missing field `camera`"), "{e}");
+        assert!(e.contains("key 'camera': missing field `camera`"), "{e}");
+        let e = err(&GOOD.replace("fov = 40\n", ""));
+        assert!(e.contains("key 'camera.fov': missing field `fov`"), "{e}");
+        // Values of colour keys are described, not named by an internal type.
+        let e = err(&GOOD.replace("albedo = 0.5", "albedo = \"grey\""));
+        assert_eq!(
+            e,
+            "s.toml:14: key 'materials.clay.albedo': invalid type: string \"grey\", expected a \
+             number or an array of 3 numbers"
+        );
+        let e = err(&GOOD.replace("radiance = [5, 5, 5]", "radiance = [5, 5]"));
+        assert!(
+            e.starts_with(
+                "s.toml:38: key 'light[0].radiance': invalid length 2, expected a number"
+            ),
+            "{e}"
+        );
+        assert!(!e.contains("RawRgb") && !e.contains("untagged"), "{e}");
+        // The numeric contract applies to the camera and lights too.
+        let e = err(&GOOD.replace("position = [0, 1, 5]", "position = [0, 1, 1e20]"));
+        assert!(
+            e.starts_with("s.toml:8: key 'camera.position': out of range (the supported range"),
+            "{e}"
+        );
     }
 
     #[test]
