@@ -125,7 +125,7 @@ fn check_transformed(mesh: &ControlMesh, m: &MeshDesc, index: usize, scene: &str
         return Err(Error::new(
             ErrorKind::Parse,
             format!(
-                "{} placed by this entry's transform reaches |coordinate| = {worst:e}, out of \
+                "{} placed by this entry's transform reaches |coordinate| = {worst:.3e}, out of \
                  range ({}); scale it down",
                 m.file.display(),
                 crate::numeric::contract()
