@@ -17,6 +17,7 @@
 //! build once, then batches of random `(face, k, u, v)` queries ([`eval_queries`]) evaluated in
 //! parallel ([`eval_batch`]).
 
+use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::obj::read_obj;
 use crate::mesh::{generate, ControlMesh, CreaseMethod};
@@ -169,19 +170,6 @@ pub fn refine_bench(args: &RefineBenchArgs) -> Result<String> {
 /// Repetitions of the timed evaluation batch in [`eval_bench`]; the median is reported.
 pub const EVAL_REPS: usize = 5;
 
-/// One evaluation query: sub-face `k` of base face `face` at `(u, v)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EvalQuery {
-    /// Base face.
-    pub face: u32,
-    /// Sub-face (0 for quads).
-    pub k: u32,
-    /// Parameter `u` in `[0, 1)`.
-    pub u: f64,
-    /// Parameter `v` in `[0, 1)`.
-    pub v: f64,
-}
-
 /// SplitMix64 (Steele, Lea and Flood 2014): a small, fast, deterministic generator, enough to
 /// spread benchmark queries (not for statistics).
 #[derive(Clone, Debug)]
@@ -212,9 +200,9 @@ impl SplitMix64 {
 /// that are not holes, the sub-face uniform over that face's sub-faces, `u` and `v` uniform in
 /// `[0, 1)`. A face counts as a hole when evaluating its centre fails (the table marks holes,
 /// whether tagged or made by the boundary rule, as empty). Fails when every face is a hole.
-pub fn eval_queries(table: &PatchTable, samples: usize, seed: u64) -> Result<Vec<EvalQuery>> {
+pub fn eval_queries(table: &PatchTable, samples: usize, seed: u64) -> Result<Vec<FaceCoord>> {
     let faces: Vec<u32> = (0..table.num_faces())
-        .filter(|&f| table.eval(f, 0, 0.5, 0.5).is_ok())
+        .filter(|&f| table.eval(FaceCoord::quad(f as u32, 0.5, 0.5)).is_ok())
         .map(|f| u32::try_from(f).expect("face index fits u32"))
         .collect();
     if faces.is_empty() && samples > 0 {
@@ -230,21 +218,17 @@ pub fn eval_queries(table: &PatchTable, samples: usize, seed: u64) -> Result<Vec
             let k = rng.below(table.sub_faces(face as usize)) as u32;
             let u = rng.next_f64();
             let v = rng.next_f64();
-            EvalQuery { face, k, u, v }
+            FaceCoord { face, k, u, v }
         })
         .collect())
 }
 
 /// Evaluates `queries` in parallel (rayon, in the current pool) and returns the limit
 /// positions in query order.
-pub fn eval_batch(table: &PatchTable, queries: &[EvalQuery]) -> Result<Vec<[f64; 3]>> {
+pub fn eval_batch(table: &PatchTable, queries: &[FaceCoord]) -> Result<Vec<[f64; 3]>> {
     queries
         .par_iter()
-        .map(|q| {
-            table
-                .eval(q.face as usize, q.k as usize, q.u, q.v)
-                .map(|s| s.p)
-        })
+        .map(|q| table.eval(*q).map(|s| s.p))
         .collect()
 }
 

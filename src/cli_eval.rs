@@ -1,15 +1,13 @@
 //! The line-oriented `limitray eval` tool: `face u v` or `face k u v` in, nine numbers out.
 
+use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::PatchTable;
 use std::io::{BufRead, Write};
 
-fn parse_sample(line: &str) -> std::result::Result<(usize, usize, f64, f64), String> {
+fn parse_sample(line: &str) -> std::result::Result<FaceCoord, String> {
     let toks: Vec<&str> = line.split_whitespace().collect();
-    let int = |t: &str| {
-        t.parse::<usize>()
-            .map_err(|_| format!("invalid index '{t}'"))
-    };
+    let int = |t: &str| t.parse::<u32>().map_err(|_| format!("invalid index '{t}'"));
     let num = |t: &str| {
         t.parse::<f64>()
             .ok()
@@ -17,8 +15,13 @@ fn parse_sample(line: &str) -> std::result::Result<(usize, usize, f64, f64), Str
             .ok_or_else(|| format!("invalid parameter '{t}'"))
     };
     match toks.len() {
-        3 => Ok((int(toks[0])?, 0, num(toks[1])?, num(toks[2])?)),
-        4 => Ok((int(toks[0])?, int(toks[1])?, num(toks[2])?, num(toks[3])?)),
+        3 => Ok(FaceCoord::quad(int(toks[0])?, num(toks[1])?, num(toks[2])?)),
+        4 => Ok(FaceCoord::new(
+            int(toks[0])?,
+            int(toks[1])?,
+            num(toks[2])?,
+            num(toks[3])?,
+        )),
         n => Err(format!(
             "expected 'face u v' or 'face k u v', found {n} fields"
         )),
@@ -39,7 +42,7 @@ pub fn run(table: &PatchTable, input: impl BufRead, mut output: impl Write) -> R
         }
         let res = parse_sample(&line)
             .map_err(|m| Error::new(ErrorKind::Parse, m))
-            .and_then(|(f, k, u, v)| table.eval(f, k, u, v));
+            .and_then(|at| table.eval(at));
         match res {
             Ok(s) => {
                 let f = |x: f64| format!("{x:?}");

@@ -198,12 +198,12 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
     };
     let render_s = t0.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    crate::io::exr::write_film(&args.output, &film)?;
+    crate::render::output::write_film(&args.output, &film)?;
     if let Some(png) = &args.png {
-        crate::io::png::write_preview(png, &film, settings.exposure)?;
+        crate::render::output::write_preview(png, &film, settings.exposure)?;
     }
     if let Some(png) = &args.levels_png {
-        crate::io::png::write_levels_preview(png, &film, settings.exposure)?;
+        crate::render::output::write_levels_preview(png, &film, settings.exposure)?;
     }
     let samples = settings.width as f64 * settings.height as f64 * settings.spp as f64;
     let report = RenderReport {

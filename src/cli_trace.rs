@@ -76,7 +76,8 @@ pub fn write_diced(w: &mut impl Write, d: &DicedMesh) -> std::io::Result<()> {
         writeln!(w, "vn {:?} {:?} {:?}", n[0], n[1], n[2])?;
     }
     for p in &d.params {
-        writeln!(w, "vt {:?} {:?}", p.2, p.3)?;
+        // Written at the f32 precision of the diced vertices.
+        writeln!(w, "vt {:?} {:?}", p.u as f32, p.v as f32)?;
     }
     for t in &d.triangles {
         let [a, b, c] = t.map(|i| i + 1);

@@ -13,6 +13,7 @@ pub mod bvh;
 pub mod cli_eval;
 pub mod cli_render;
 pub mod cli_trace;
+pub mod coord;
 pub mod dice;
 #[cfg(feature = "embree")]
 pub mod embree;
@@ -29,4 +30,5 @@ pub mod refine;
 pub mod render;
 pub mod vec3;
 
+pub use coord::FaceCoord;
 pub use error::{Error, ErrorKind, Result};

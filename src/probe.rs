@@ -5,6 +5,7 @@
 use crate::bench::SplitMix64;
 use crate::bvh::exact::refine_hit;
 use crate::bvh::{MeshBvh, Ray};
+use crate::coord::FaceCoord;
 use crate::dice::DicedMesh;
 use crate::patch::PatchTable;
 use crate::vec3::{cross, dot, norm, sub};
@@ -188,7 +189,7 @@ pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f6
             let l0 = 1.0 - l1 - l2;
             let u = l0 * uv[0][0] + l1 * uv[1][0] + l2 * uv[2][0];
             let v = l0 * uv[0][1] + l1 * uv[1][1] + l2 * uv[2][1];
-            let Ok(s) = table.eval(info.face as usize, info.k as usize, u, v) else {
+            let Ok(s) = table.eval(FaceCoord::new(info.face, info.k, u, v)) else {
                 continue;
             };
             let lin: [f64; 3] = std::array::from_fn(|k| l0 * a[k] + l1 * b[k] + l2 * c[k]);
@@ -241,7 +242,7 @@ pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u6
             let dir = ray.dir.map(|x| x as f64);
             let hp: [f64; 3] = std::array::from_fn(|k| o[k] + h.t as f64 * dir[k]);
             let s = table
-                .eval(h.face as usize, h.k as usize, h.u as f64, h.v as f64)
+                .eval(FaceCoord::new(h.face, h.k, h.u as f64, h.v as f64))
                 .ok()?;
             let param_err = norm(sub(hp, s.p));
             match refine_hit(table, ray, &h) {

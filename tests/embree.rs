@@ -38,6 +38,7 @@ use limitray::embree::subdiv::{
 };
 use limitray::embree::{bench, ffi, triangles, Device, SceneOptions};
 use limitray::mesh::{obj::read_obj, BoundaryInterpolation, ControlMesh, MeshBuilder};
+use limitray::FaceCoord;
 use std::mem::{align_of, offset_of, size_of};
 
 /// Embree's limit surface against limitray's (relative to the diagonal) on shapes whose rules
@@ -107,7 +108,7 @@ fn one_triangle() -> limitray::dice::DicedMesh {
     limitray::dice::DicedMesh {
         positions: vec![[-1.0, -1.0, 0.0], [3.0, -1.0, 0.0], [-1.0, 3.0, 0.0]],
         normals: vec![[0.0, 0.0, 1.0]; 3],
-        params: vec![(0, 0, 0.0, 0.0); 3],
+        params: vec![limitray::FaceCoord::default(); 3],
         triangles: vec![[0, 1, 2]],
         tri_info: vec![limitray::dice::TriInfo {
             face: 0,
@@ -271,7 +272,7 @@ fn quad_orientation_and_ngon_packing_on_generated_meshes() {
     for f in [7u32, 14, 20] {
         for &(u, v) in &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.2, 0.6)] {
             let e = scene.interpolate(0, f, u as f32, v as f32).unwrap().p;
-            let x = table.eval(f as usize, 0, u, v).unwrap().p;
+            let x = table.eval(FaceCoord::quad(f, u, v)).unwrap().p;
             let d = (0..3)
                 .map(|i| (e[i] as f64 - x[i]).powi(2))
                 .sum::<f64>()

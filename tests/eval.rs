@@ -9,6 +9,7 @@ use limitray::mesh::ControlMesh;
 use limitray::patch::{PatchOptions, PatchTable};
 use limitray::refine::limit::LimitStencils;
 use limitray::refine::Refiner;
+use limitray::FaceCoord;
 
 /// (vertex at `level`, base face, sub-face, u, v) for every corner of every level-`level`
 /// descendant of every base face.
@@ -74,7 +75,9 @@ fn max_error(mesh: &ControlMesh, level: usize, opts: PatchOptions) -> f64 {
         if r.levels[0].face_hole[f] {
             continue;
         }
-        let s = table.eval(f, k, u, w).unwrap();
+        let s = table
+            .eval(FaceCoord::new(f as u32, k as u32, u, w))
+            .unwrap();
         let d = common::dist(&s.p, &limit[v as usize]) / diag;
         worst = worst.max(d);
     }
@@ -144,10 +147,15 @@ fn derivatives_match_central_differences() {
             // extraordinary vertices live
             let u = 0.05 + 0.9 * rnd();
             let v = 0.05 + 0.9 * rnd();
-            let Ok(s) = table.eval(f, k, u, v) else {
+            let Ok(s) = table.eval(FaceCoord::new(f as u32, k as u32, u, v)) else {
                 continue;
             };
-            let e = |a: f64, b: f64| table.eval(f, k, a, b).unwrap().p;
+            let e = |a: f64, b: f64| {
+                table
+                    .eval(FaceCoord::new(f as u32, k as u32, a, b))
+                    .unwrap()
+                    .p
+            };
             let (pu, mu, pv, mv) = (e(u + h, v), e(u - h, v), e(u, v + h), e(u, v - h));
             for c in 0..3 {
                 let fu = (pu[c] - mu[c]) / (2.0 * h);
@@ -178,9 +186,9 @@ fn repose_without_reanalysis() {
         .iter()
         .map(|p| [2.0 * p[0] + 1.0, 2.0 * p[1], 2.0 * p[2] - 3.0])
         .collect();
-    let before = table.eval(3, 0, 0.3, 0.7).unwrap().p;
+    let before = table.eval(FaceCoord::quad(3, 0.3, 0.7)).unwrap().p;
     table.set_positions(&moved);
-    let after = table.eval(3, 0, 0.3, 0.7).unwrap().p;
+    let after = table.eval(FaceCoord::quad(3, 0.3, 0.7)).unwrap().p;
     let expect = [
         2.0 * before[0] + 1.0,
         2.0 * before[1],
@@ -222,7 +230,7 @@ fn patches_tile_their_faces_and_know_their_domain() {
             let u = p.origin[0] + 0.5 * (p.axis_u[0] + p.axis_v[0]);
             let v = p.origin[1] + 0.5 * (p.axis_u[1] + p.axis_v[1]);
             let s = table
-                .eval(p.face as usize, p.sub_face as usize, u, v)
+                .eval(FaceCoord::new(p.face, p.sub_face as u32, u, v))
                 .unwrap();
             assert!(s.level >= p.level);
         }

@@ -3,7 +3,8 @@
 //! the exr crate's reader with the documented channels, and the `render` command end to end
 //! (including located scene-file errors with exit code 2).
 
-use limitray::io::exr::{read_channels, write_film, write_planes, CHANNELS};
+use limitray::io::exr::{read_channels, write_planes};
+use limitray::render::output::{write_film, CHANNELS};
 use limitray::render::scene::parse_scene;
 use limitray::render::{Film, World};
 use std::path::{Path, PathBuf};

@@ -112,7 +112,7 @@ fn deep_hierarchies_are_traversed_completely() {
         for p in [[0.0, 0.0, 0.0], [x, 0.0, 0.0], [0.0, 1.0, 0.0]] {
             d.positions.push(p);
             d.normals.push([0.0, 0.0, 1.0]);
-            d.params.push((0, 0, 0.0, 0.0));
+            d.params.push(limitray::FaceCoord::default());
         }
         d.triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
         d.tri_info.push(TriInfo {

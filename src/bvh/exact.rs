@@ -7,6 +7,7 @@
 //! reported as `None` rather than as a wrong answer.
 
 use super::ray::{Hit, Ray};
+use crate::coord::FaceCoord;
 use crate::patch::PatchTable;
 use crate::vec3::{cross, dot, norm};
 
@@ -46,7 +47,12 @@ pub fn refine_hit(table: &PatchTable, ray: &Ray, hit: &Hit) -> Option<ExactHit> 
     let mut best: Option<ExactHit> = None;
     for it in 0..=MAX_STEPS {
         let s = table
-            .eval(face, k, u.clamp(0.0, 1.0), v.clamp(0.0, 1.0))
+            .eval(FaceCoord::new(
+                face as u32,
+                k as u32,
+                u.clamp(0.0, 1.0),
+                v.clamp(0.0, 1.0),
+            ))
             .ok()?;
         let f = [
             s.p[0] - o[0] - t * d[0],

@@ -247,7 +247,7 @@ impl MeshBvh {
             t,
             triangle: tri,
             face: info.face,
-            k: info.k as u32,
+            k: info.k,
             u,
             v,
             b1,

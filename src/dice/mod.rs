@@ -25,6 +25,7 @@ pub use estimate::DiceEstimate;
 pub use pattern::{pattern, side_uv, Pattern};
 pub use rates::{edge_rates, DiceRate, Rates, ScreenRate};
 
+use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
 use crate::patch::PatchTable;
@@ -58,7 +59,7 @@ pub struct TriInfo {
     /// Base face.
     pub face: u32,
     /// Sub-face (0 for quads).
-    pub k: u8,
+    pub k: u32,
     /// Level of the patch at the triangle's centroid.
     pub level: u8,
     /// `(u, v)` of the three corners in `(face, k)`'s parameterisation.
@@ -73,7 +74,7 @@ pub struct DicedMesh {
     /// Unit limit normals.
     pub normals: Vec<[f32; 3]>,
     /// `(face, k, u, v)` of each vertex in the domain that evaluated it.
-    pub params: Vec<(u32, u8, f32, f32)>,
+    pub params: Vec<FaceCoord>,
     /// Triangles, counter-clockwise as the control faces.
     pub triangles: Vec<[u32; 3]>,
     /// Attributes of each triangle.
@@ -85,7 +86,7 @@ impl DicedMesh {
     pub fn bytes(&self) -> usize {
         self.positions.len() * 12
             + self.normals.len() * 12
-            + self.params.len() * std::mem::size_of::<(u32, u8, f32, f32)>()
+            + self.params.len() * std::mem::size_of::<FaceCoord>()
             + self.triangles.len() * 12
             + self.tri_info.len() * std::mem::size_of::<TriInfo>()
     }
@@ -108,19 +109,19 @@ impl DicedMesh {
 struct Point {
     p: [f32; 3],
     n: [f32; 3],
-    param: (u32, u8, f32, f32),
+    param: FaceCoord,
 }
 
 /// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
 /// vanishes (corners of boundary faces, crease ends), the normal is taken a little inside the
 /// domain.
-fn eval_point(table: &PatchTable, face: u32, k: u8, u: f64, v: f64) -> Result<Point> {
-    let s = table.eval(face as usize, k as usize, u, v)?;
+fn eval_point(table: &PatchTable, face: u32, k: u32, u: f64, v: f64) -> Result<Point> {
+    let s = table.eval(FaceCoord::new(face, k, u, v))?;
     let mut n = cross(s.du, s.dv);
     let scale = norm(s.du) * norm(s.dv);
     if norm(n).is_nan() || norm(n) <= 1e-10 * scale {
         let (u2, v2) = (u + (0.5 - u) * 1e-4, v + (0.5 - v) * 1e-4);
-        let s2 = table.eval(face as usize, k as usize, u2, v2)?;
+        let s2 = table.eval(FaceCoord::new(face, k, u2, v2))?;
         n = cross(s2.du, s2.dv);
     }
     let l = norm(n);
@@ -132,20 +133,20 @@ fn eval_point(table: &PatchTable, face: u32, k: u8, u: f64, v: f64) -> Result<Po
     Ok(Point {
         p: s.p.map(|x| x as f32),
         n: n.map(|x| x as f32),
-        param: (face, k, u as f32, v as f32),
+        param: FaceCoord::new(face, k, u, v),
     })
 }
 
 /// The point at fraction `t ∈ [0, 1]` along face edge `m` of face `f` (from its vertex `m`
 /// to vertex `m + 1`), as `(k, u, v)` in that face's domains.
-pub fn face_edge_param(n: usize, m: usize, t: f64) -> (u8, f64, f64) {
+pub fn face_edge_param(n: usize, m: usize, t: f64) -> (u32, f64, f64) {
     if n == 4 {
         let [u, v] = side_uv(m, t);
         (0, u, v)
     } else if t <= 0.5 {
-        (m as u8, 2.0 * t, 0.0)
+        (m as u32, 2.0 * t, 0.0)
     } else {
-        (((m + 1) % n) as u8, 0.0, 2.0 - 2.0 * t)
+        (((m + 1) % n) as u32, 0.0, 2.0 - 2.0 * t)
     }
 }
 
@@ -207,7 +208,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
         .collect();
 
     // --- Shared points: evaluate in parallel, then lay out. -------------------------------
-    let mut jobs: Vec<(u32, u8, f64, f64)> = Vec::new();
+    let mut jobs: Vec<(u32, u32, f64, f64)> = Vec::new();
     let mut vertex = vec![u32::MAX; topo.num_vertices];
     for v in 0..topo.num_vertices {
         let faces = topo.vertex_faces(v);
@@ -258,7 +259,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
             let s = rates.spoke[base + k];
             spoke_first[base + k] = jobs.len() as u32;
             for i in 1..s {
-                jobs.push((f as u32, k as u8, 1.0, i as f64 / s as f64));
+                jobs.push((f as u32, k as u32, 1.0, i as f64 / s as f64));
             }
         }
     }
@@ -275,12 +276,12 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     };
 
     // --- Domains: stitch patterns, evaluate interiors, in parallel. -----------------------
-    let domains: Vec<(u32, u8)> = (0..topo.num_faces())
+    let domains: Vec<(u32, u32)> = (0..topo.num_faces())
         .filter(|&f| live(f))
         .flat_map(|f| {
             let n = topo.face_size(f);
             let ks = if n == 4 { 1 } else { n };
-            (0..ks).map(move |k| (f as u32, k as u8))
+            (0..ks).map(move |k| (f as u32, k as u32))
         })
         .collect();
     let ctx = DomainCtx {
@@ -453,10 +454,10 @@ impl DomainCtx<'_> {
         for (s, side) in sides.iter().enumerate() {
             for (j, sp) in side[..side.len() - 1].iter().enumerate() {
                 let owner = self.shared.points[sp.index as usize].param;
-                if sp.seam && (owner.0 as usize != f || owner.1 as usize != k) {
+                if sp.seam && (owner.face as usize != f || owner.k as usize != k) {
                     // A seam vertex owned by another domain: copy its position, own normal.
                     let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
-                    let mut q = eval_point(self.table, f as u32, k as u8, u, v)?;
+                    let mut q = eval_point(self.table, f as u32, k as u32, u, v)?;
                     q.p = self.shared.points[sp.index as usize].p;
                     map.push(LOCAL | out.points.len() as u32);
                     out.points.push(q);
@@ -468,7 +469,7 @@ impl DomainCtx<'_> {
         for &[u, v] in &pat.interior {
             map.push(LOCAL | out.points.len() as u32);
             out.points
-                .push(eval_point(self.table, f as u32, k as u8, u, v)?);
+                .push(eval_point(self.table, f as u32, k as u32, u, v)?);
         }
         for t in &pat.triangles {
             let uv = t.map(|i| pat.uv(i as usize));
@@ -476,11 +477,14 @@ impl DomainCtx<'_> {
                 (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
                 (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
             );
-            let level = self.table.eval(f, k, cu, cv)?.level;
+            let level = self
+                .table
+                .eval(FaceCoord::new(f as u32, k as u32, cu, cv))?
+                .level;
             out.triangles.push(t.map(|i| map[i as usize]));
             out.tri_info.push(TriInfo {
                 face: f as u32,
-                k: k as u8,
+                k: k as u32,
                 level,
                 uv: uv.map(|p| [p[0] as f32, p[1] as f32]),
             });

@@ -6,6 +6,7 @@
 //! half of it.
 
 use super::{face_edge_param, DiceOptions};
+use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::PatchTable;
 use crate::refine::Level;
@@ -125,11 +126,11 @@ pub fn edge_rates(table: &PatchTable, level: &Level, opts: &DiceOptions) -> Resu
             max_rate
         }
     };
-    let curve = |f: usize, points: &dyn Fn(f64) -> (u8, f64, f64)| -> Result<Vec<[f64; 3]>> {
+    let curve = |f: usize, points: &dyn Fn(f64) -> (u32, f64, f64)| -> Result<Vec<[f64; 3]>> {
         (0..=MEASURE_SEGMENTS)
             .map(|i| {
                 let (k, u, v) = points(i as f64 / MEASURE_SEGMENTS as f64);
-                Ok(table.eval(f, k as usize, u, v)?.p)
+                Ok(table.eval(FaceCoord::new(f as u32, k, u, v))?.p)
             })
             .collect()
     };
@@ -168,7 +169,7 @@ pub fn edge_rates(table: &PatchTable, level: &Level, opts: &DiceOptions) -> Resu
             let slot = topo.face_offsets[f] as usize + k;
             spoke[slot] = match (&measure, opts.rate) {
                 (None, DiceRate::Uniform(r)) => (r.min(max_rate) / 2).max(1),
-                (Some(m), _) => to_rate(m(&curve(f, &|t| (k as u8, 1.0, t))?)),
+                (Some(m), _) => to_rate(m(&curve(f, &|t| (k as u32, 1.0, t))?)),
                 (None, _) => unreachable!("measured rates have a measure"),
             };
         }

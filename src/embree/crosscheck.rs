@@ -10,6 +10,7 @@ use super::rays::{self, SplitMix64, TestRay};
 use super::subdiv::{embree_uv_to_ptex, ptex_to_embree_uv, subdivision_scene};
 use super::{Device, EmbreeHit, Scene, SceneOptions};
 use crate::bvh::{MeshBvh, Ray};
+use crate::coord::FaceCoord;
 use crate::dice::{dice, DiceOptions, DiceRate};
 use crate::error::Result;
 use crate::mesh::{ControlMesh, CreaseMethod, Options};
@@ -176,7 +177,7 @@ pub fn interpolation_check_with(
     let param_d: Vec<Sample> = params
         .par_iter()
         .filter_map(|&(f, k, u, v)| {
-            let exact = table.eval(f as usize, k as usize, u, v).ok()?;
+            let exact = table.eval(FaceCoord::new(f, k, u, v)).ok()?;
             let n = mesh.face(f as usize).len();
             let (eu, ev) = ptex_to_embree_uv(n, k as usize, u, v);
             let e = scene.interpolate(0, f, eu, ev).ok()?;
@@ -200,7 +201,7 @@ pub fn interpolation_check_with(
             let f = h.prim_id;
             let n = mesh.face(f as usize).len();
             let (k, u, v) = embree_uv_to_ptex(n, h.u, h.v);
-            let exact = table.eval(f as usize, k, u, v).ok()?;
+            let exact = table.eval(FaceCoord::new(f, k as u32, u, v)).ok()?;
             let e = scene.interpolate(0, f, h.u, h.v).ok()?;
             let at = (f, k as u32, u, v);
             let p: [f64; 3] =

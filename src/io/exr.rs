@@ -1,30 +1,13 @@
-//! OpenEXR output of a rendered film (RGBA beauty plus AOV channels) and channel reading (for
-//! environment maps and tests), through the `exr` crate.
-//!
-//! Channels written, all 32-bit float, one layer, ZIP compression in scan lines of 16, lines in
-//! increasing order (so that the same film always gives the same bytes):
-//!
-//! | channel | meaning |
-//! |---|---|
-//! | `R G B A` | mean radiance; alpha = fraction of samples whose camera ray hit geometry |
-//! | `Z` | camera distance of the first hit (`inf` for a miss) |
-//! | `N.X N.Y N.Z` | first-hit world-space shading normal (facing the camera), sample mean |
-//! | `albedo.R albedo.G albedo.B` | first-hit albedo, sample mean |
-//! | `faceid` | base face of the first hit (`-1` for a miss) |
-//! | `level` | patch subdivision level of the first hit (`-1` for a miss) |
+//! OpenEXR reading and writing of named `f32` planes, through the `exr` crate: one layer, ZIP
+//! compression in scan lines of 16, lines in increasing order (so that the same planes always
+//! give the same bytes). The renderer's channel set is [`crate::render::output`]'s. Files are
+//! written through [`Output`] (checked path, atomic replacement).
 
 use super::output::Output;
 use crate::error::{Error, ErrorKind, Result};
-use crate::render::film::Film;
 use ::exr::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// The channel names written by [`write_film`], in the order of the table above.
-pub const CHANNELS: [&str; 13] = [
-    "R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "albedo.R", "albedo.G", "albedo.B", "faceid",
-    "level",
-];
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string())
@@ -67,7 +50,7 @@ pub fn encode_planes(
 
 /// Writes named `f32` planes (row-major, `width × height` each) as one EXR layer to `path`
 /// (`-`: standard output) through [`Output`]: an existing file is replaced only by a complete
-/// one.
+/// one, and never touched when writing fails.
 pub fn write_planes(
     path: &Path,
     width: usize,
@@ -90,72 +73,6 @@ pub fn write_planes_to(
     let name = PathBuf::from(out.name());
     let bytes = encode_planes(&name, width, height, planes)?;
     out.write_all(&bytes).map_err(|e| io_error(&name, e))
-}
-
-fn film_planes(film: &Film) -> Vec<(&'static str, Vec<f32>)> {
-    vec![
-        ("R", film.plane(|p| p.rgba[0])),
-        ("G", film.plane(|p| p.rgba[1])),
-        ("B", film.plane(|p| p.rgba[2])),
-        ("A", film.plane(|p| p.rgba[3])),
-        ("Z", film.plane(|p| p.z)),
-        ("N.X", film.plane(|p| p.normal[0])),
-        ("N.Y", film.plane(|p| p.normal[1])),
-        ("N.Z", film.plane(|p| p.normal[2])),
-        ("albedo.R", film.plane(|p| p.albedo[0])),
-        ("albedo.G", film.plane(|p| p.albedo[1])),
-        ("albedo.B", film.plane(|p| p.albedo[2])),
-        ("faceid", film.plane(|p| p.face)),
-        ("level", film.plane(|p| p.level)),
-    ]
-}
-
-/// Writes the film's beauty and AOVs (see the module documentation for the channels).
-pub fn write_film(path: &Path, film: &Film) -> Result<()> {
-    write_planes(
-        path,
-        film.width as usize,
-        film.height as usize,
-        film_planes(film),
-    )
-}
-
-/// [`write_film`] into an output opened before the render; the caller commits it.
-pub fn write_film_to(out: &mut Output, film: &Film) -> Result<()> {
-    write_planes_to(
-        out,
-        film.width as usize,
-        film.height as usize,
-        film_planes(film),
-    )
-}
-
-/// Bytes an encoded film of `width × height` takes at most while being written: the 13
-/// planes, the encoder's copy and the (at worst uncompressed) encoded file, 4 bytes a sample
-/// each.
-pub fn film_write_bytes(width: u64, height: u64) -> f64 {
-    width as f64 * height as f64 * CHANNELS.len() as f64 * 4.0 * 3.0
-}
-
-/// All channels of the first layer of an EXR file, converted to `f32`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ExrChannels {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// `(name, row-major samples)` in the file's (alphabetical) order.
-    pub channels: Vec<(String, Vec<f32>)>,
-}
-
-impl ExrChannels {
-    /// The samples of channel `name`.
-    pub fn get(&self, name: &str) -> Option<&[f32]> {
-        self.channels
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.as_slice())
-    }
 }
 
 /// Bytes [`read_channels`] needs for a layer of `width × height` with `channels` channels:
@@ -184,6 +101,27 @@ fn check_header(path: &Path) -> Result<()> {
         total,
         "use a smaller image",
     )
+}
+
+/// All channels of the first layer of an EXR file, converted to `f32`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExrChannels {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `(name, row-major samples)` in the file's (alphabetical) order.
+    pub channels: Vec<(String, Vec<f32>)>,
+}
+
+impl ExrChannels {
+    /// The samples of channel `name`.
+    pub fn get(&self, name: &str) -> Option<&[f32]> {
+        self.channels
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
 }
 
 /// Reads every channel of the first layer (largest resolution level, no deep data). The

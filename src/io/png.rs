@@ -1,123 +1,27 @@
-//! Tone-mapped 8-bit sRGB PNG previews.
-//!
-//! Tone curve: the radiance is multiplied by `2^exposure`, mapped per channel with the
-//! ACES filmic fit of Narkowicz (2015), `x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)`, clamped to
-//! `[0, 1]`, encoded with the sRGB transfer function and rounded to 8 bits. Alpha is not
-//! written (the preview is opaque).
+//! 8-bit RGB PNG writing, through the `image` crate and [`Output`] (checked path, atomic
+//! replacement).
 
 use super::output::Output;
 use crate::error::{Error, ErrorKind, Result};
-use crate::render::film::Film;
 use std::io::Write;
 use std::path::Path;
 
-/// The ACES filmic approximation (Narkowicz 2015), clamped to `[0, 1]`.
-pub fn aces(x: f32) -> f32 {
-    let x = if x.is_finite() { x.max(0.0) } else { 0.0 };
-    let v = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
-    v.clamp(0.0, 1.0)
-}
-
-/// The sRGB transfer function for linear values in `[0, 1]`.
-pub fn srgb_encode(x: f32) -> f32 {
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// The 8-bit sRGB value of one linear radiance channel at `exposure` stops.
-pub fn tone_map(x: f32, exposure: f32) -> u8 {
-    let v = srgb_encode(aces(x * exposure.exp2()));
-    (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8
-}
-
-/// Writes the film's beauty as a tone-mapped sRGB PNG (`-`: standard output), replacing an
-/// existing file only with a complete one.
-pub fn write_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
+/// Writes `width × height` row-major RGB8 pixels (`rgb.len() == 3 · width · height`) as a PNG
+/// (`-`: standard output); an existing file is replaced only by a complete one.
+pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<()> {
     let mut out = Output::create(path)?;
-    write_preview_to(&mut out, film, exposure)?;
+    write_rgb8_to(&mut out, width, height, rgb)?;
     out.commit()
 }
 
-/// [`write_preview`] into an output opened before the render; the caller commits it.
-pub fn write_preview_to(out: &mut Output, film: &Film, exposure: f32) -> Result<()> {
-    let mut buf = Vec::with_capacity(film.pixels.len() * 3);
-    for p in &film.pixels {
-        for c in 0..3 {
-            buf.push(tone_map(p.rgba[c], exposure));
-        }
-    }
-    let img = image::RgbImage::from_raw(film.width, film.height, buf).ok_or_else(|| {
-        Error::new(ErrorKind::Io, "image size mismatch").in_file(out.name().to_string())
-    })?;
-    encode_into(out, &img)
-}
-
-/// Colours of patch levels 0, 1, 2, … in [`write_levels_preview`] (the last repeats).
-pub const LEVEL_COLOURS: [[f32; 3]; 8] = [
-    [0.20, 0.45, 0.90],
-    [0.20, 0.75, 0.35],
-    [0.95, 0.85, 0.20],
-    [0.95, 0.55, 0.15],
-    [0.90, 0.25, 0.20],
-    [0.80, 0.30, 0.75],
-    [0.55, 0.35, 0.95],
-    [0.95, 0.95, 0.95],
-];
-
-/// Writes the papers' coloured-levels view: each pixel's patch level (the `level` AOV) as a
-/// colour from [`LEVEL_COLOURS`], shaded by the tone-mapped beauty so the shapes stay
-/// readable; misses are black.
-pub fn write_levels_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
-    let mut out = Output::create(path)?;
-    write_levels_preview_to(&mut out, film, exposure)?;
-    out.commit()
-}
-
-/// [`write_levels_preview`] into an output opened before the render; the caller commits it.
-pub fn write_levels_preview_to(out: &mut Output, film: &Film, exposure: f32) -> Result<()> {
-    let mut buf = Vec::with_capacity(film.pixels.len() * 3);
-    for p in &film.pixels {
-        if p.level < 0.0 {
-            buf.extend_from_slice(&[0, 0, 0]);
-            continue;
-        }
-        let c = LEVEL_COLOURS[(p.level as usize).min(LEVEL_COLOURS.len() - 1)];
-        let lum = 0.2126 * p.rgba[0] + 0.7152 * p.rgba[1] + 0.0722 * p.rgba[2];
-        let shade = 0.35 + 0.65 * srgb_encode(aces(lum * exposure.exp2()));
-        for ch in c {
-            buf.push((srgb_encode(ch * shade) * 255.0 + 0.5).clamp(0.0, 255.0) as u8);
-        }
-    }
-    let img = image::RgbImage::from_raw(film.width, film.height, buf).ok_or_else(|| {
-        Error::new(ErrorKind::Io, "image size mismatch").in_file(out.name().to_string())
-    })?;
-    encode_into(out, &img)
-}
-
-/// Encodes a PNG in memory and writes it to `out`.
-fn encode_into(out: &mut Output, img: &image::RgbImage) -> Result<()> {
-    let err = |e: String| Error::new(ErrorKind::Io, e).in_file(out.name().to_string());
+/// [`write_rgb8`] into an output opened before the work started; the caller commits it.
+pub fn write_rgb8_to(out: &mut Output, width: u32, height: u32, rgb: Vec<u8>) -> Result<()> {
+    let err = |name: &str, e: String| Error::new(ErrorKind::Io, e).in_file(name.to_string());
+    let img = image::RgbImage::from_raw(width, height, rgb)
+        .ok_or_else(|| err(out.name(), "image size mismatch".to_string()))?;
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| err(e.to_string()))?;
+        .map_err(|e| err(out.name(), e.to_string()))?;
     let r = out.write_all(bytes.get_ref());
-    r.map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(out.name().to_string()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn curve() {
-        assert_eq!(tone_map(0.0, 0.0), 0);
-        assert_eq!(tone_map(1e9, 0.0), 255);
-        assert_eq!(tone_map(f32::NAN, 0.0), 0);
-        // ACES(0.18) ≈ 0.267 → sRGB ≈ 0.555 → 141.
-        assert_eq!(tone_map(0.18, 0.0), 141);
-        assert!(tone_map(0.18, 1.0) > tone_map(0.18, 0.0));
-    }
+    r.map_err(|e| err(out.name(), e.to_string()))
 }

@@ -18,6 +18,7 @@ use super::bspline::{self, ControlGrid, PatchPoint};
 use super::local::{child_face, extract_faces, LocalMesh};
 use super::regular::{classify, RegularKind};
 use super::single_crease;
+use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, CreaseMethod, Options};
 use crate::refine::limit::vertex_limit_frame;
@@ -529,8 +530,9 @@ impl PatchTable {
         self.root_offsets.len() - 1
     }
 
-    /// Evaluates the limit surface at `(u, v)` of sub-face `k` of base face `face`.
-    pub fn eval(&self, face: usize, k: usize, u: f64, v: f64) -> Result<Sample> {
+    /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
+    pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
         if face >= self.num_faces() {
             return Err(Error::new(
                 ErrorKind::Usage,
@@ -585,13 +587,10 @@ impl PatchTable {
         }
     }
 
-    /// Evaluates many samples `(face, k, u, v)` in parallel.
-    pub fn eval_batch(&self, samples: &[(usize, usize, f64, f64)]) -> Vec<Result<Sample>> {
+    /// Evaluates many samples in parallel.
+    pub fn eval_batch(&self, samples: &[FaceCoord]) -> Vec<Result<Sample>> {
         use rayon::prelude::*;
-        samples
-            .par_iter()
-            .map(|&(f, k, u, v)| self.eval(f, k, u, v))
-            .collect()
+        samples.par_iter().map(|&at| self.eval(at)).collect()
     }
 
     fn grid(&self, first: u32) -> ControlGrid {

@@ -8,6 +8,7 @@ pub mod film;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod output;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
