@@ -320,3 +320,31 @@ fn an_exr_header_claiming_a_huge_window_is_refused() {
     assert!(e.message.contains("above the limit"), "{e}");
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn isolation_levels_outside_the_supported_range_are_refused() {
+    budget();
+    // `stats --max-level 300` used to wrap at 256; 0 was silently 1.
+    let cube = shapes::rounded_box(0.0);
+    for bad in [0, 17, 256, 300] {
+        let e = PatchTable::new(
+            &cube,
+            PatchOptions {
+                max_level: bad,
+                ..PatchOptions::default()
+            },
+        )
+        .err()
+        .unwrap();
+        assert_eq!(e.kind, ErrorKind::Usage);
+        assert_eq!(
+            e.message,
+            format!("maximum isolation level {bad} is outside 1..=16")
+        );
+    }
+    let ok = PatchOptions {
+        max_level: limitray::patch::table::MAX_LEVEL,
+        ..PatchOptions::default()
+    };
+    assert!(PatchTable::new(&cube, ok).is_ok());
+}

@@ -303,8 +303,9 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
         let max_level = match &r.max_level {
             Some(v) => {
                 let x = *v.get_ref();
-                if !(0..=16).contains(&x) {
-                    return Err(src.err(v.span(), "max_level must be in 0..=16"));
+                let max = crate::patch::table::MAX_LEVEL as i64;
+                if !(1..=max).contains(&x) {
+                    return Err(src.err(v.span(), format!("max_level must be in 1..={max}")));
                 }
                 x as usize
             }
