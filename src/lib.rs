@@ -21,6 +21,7 @@ pub mod error;
 pub mod gpu;
 pub mod info;
 pub mod io;
+pub mod lines;
 pub mod memory;
 pub mod mesh;
 pub mod numeric;
@@ -28,6 +29,7 @@ pub mod patch;
 pub mod probe;
 pub mod refine;
 pub mod render;
+pub mod threads;
 pub mod vec3;
 
 pub use coord::FaceCoord;
