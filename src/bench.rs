@@ -72,16 +72,13 @@ pub fn refine_bench(args: &RefineBenchArgs) -> Result<String> {
             );
             (name, read_obj(path)?)
         }
-        (None, Some(n)) => (format!("grid{n}"), generate::grid(n)),
+        (None, Some(n)) => (format!("grid{n}"), generate::try_grid(n)?),
         _ => return Err(usage("give either a mesh file or --grid N".into())),
     };
     if args.chaikin {
         mesh.options.crease_method = CreaseMethod::Chaikin;
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| usage(format!("cannot start thread pool: {e}")))?;
+    let pool = crate::threads::pool(args.threads.unwrap_or(0))?;
     let threads = pool.current_num_threads();
     let level = args.level;
 
@@ -269,10 +266,7 @@ pub fn eval_bench(
     )?;
     let build_ms = ms_since(t0);
     let queries = eval_queries(&table, samples, seed)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| usage(format!("cannot start thread pool: {e}")))?;
+    let pool = crate::threads::pool(threads)?;
 
     let mut times = Vec::with_capacity(EVAL_REPS);
     let mut sum = None;

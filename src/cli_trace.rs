@@ -353,7 +353,7 @@ pub fn random_rays(bounds: [[f32; 3]; 2], n: usize, seed: u64) -> Vec<Ray> {
 pub fn trace_bench(args: &TraceBenchArgs) -> Result<String> {
     let mesh = match (&args.mesh, args.grid) {
         (Some(p), None) => crate::mesh::obj::read_obj(p)?,
-        (None, Some(n)) => crate::mesh::generate::grid(n),
+        (None, Some(n)) => crate::mesh::generate::try_grid(n)?,
         _ => {
             return Err(Error::new(
                 ErrorKind::Usage,
@@ -366,10 +366,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<String> {
     } else {
         args.threads
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::new(ErrorKind::Usage, e.to_string()))?;
+    let pool = crate::threads::pool(threads)?;
     pool.install(|| {
         let t0 = std::time::Instant::now();
         let table = PatchTable::new(&mesh, PatchOptions::default())?;

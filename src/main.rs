@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use limitray::error::{Error, ErrorKind};
+use limitray::io::output::Output;
 use limitray::mesh::obj::{read_obj, write_obj};
 use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
 use limitray::patch::{PatchOptions, PatchTable};
@@ -18,6 +19,14 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Memory budget (e.g. 8G, 512M): work whose estimated size is above it stops with an
+    /// error before allocating (default: three quarters of physical memory).
+    #[arg(long, global = true, value_parser = parse_memory)]
+    memory_limit: Option<u64>,
+}
+
+fn parse_memory(s: &str) -> Result<u64, String> {
+    limitray::memory::parse_size(s).map_err(|e| e.message)
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -216,6 +225,7 @@ fn run(cli: Cli) -> Result<(), Error> {
             output,
             limit,
         } => {
+            let mut out = Output::create(&output)?;
             let m = load(&mesh)?;
             let opts = rules.options(&m);
             let r = Refiner::with_options(&m, opts, level)?;
@@ -238,16 +248,8 @@ fn run(cli: Cli) -> Result<(), Error> {
             let io_err = |e: std::io::Error| {
                 Error::new(ErrorKind::Io, e.to_string()).in_file(output.display().to_string())
             };
-            if output.as_os_str() == "-" {
-                let stdout = std::io::stdout();
-                let mut w = std::io::BufWriter::new(stdout.lock());
-                write_obj(&mut w, &pos, &offsets, &verts).map_err(io_err)?;
-            } else {
-                let f = std::fs::File::create(&output).map_err(io_err)?;
-                let mut w = std::io::BufWriter::new(f);
-                write_obj(&mut w, &pos, &offsets, &verts).map_err(io_err)?;
-            }
-            Ok(())
+            write_obj(&mut out, &pos, &offsets, &verts).map_err(io_err)?;
+            out.commit()
         }
         Command::Eval {
             mesh,
@@ -330,21 +332,14 @@ fn run(cli: Cli) -> Result<(), Error> {
             dice,
             output,
         } => {
+            let mut out = Output::create(&output)?;
             let m = load(&mesh)?;
             let (_, d) = limitray::cli_trace::dice_mesh(&m, rules.options(&m), &dice)?;
             let io_err = |e: std::io::Error| {
                 Error::new(ErrorKind::Io, e.to_string()).in_file(output.display().to_string())
             };
-            if output.as_os_str() == "-" {
-                let stdout = std::io::stdout();
-                let mut w = std::io::BufWriter::new(stdout.lock());
-                limitray::cli_trace::write_diced(&mut w, &d).map_err(io_err)?;
-            } else {
-                let f = std::fs::File::create(&output).map_err(io_err)?;
-                let mut w = std::io::BufWriter::new(f);
-                limitray::cli_trace::write_diced(&mut w, &d).map_err(io_err)?;
-            }
-            Ok(())
+            limitray::cli_trace::write_diced(&mut out, &d).map_err(io_err)?;
+            out.commit()
         }
         Command::Trace {
             mesh,
@@ -414,6 +409,9 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
+    if let Some(bytes) = cli.memory_limit {
+        limitray::memory::set_limit(bytes);
+    }
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

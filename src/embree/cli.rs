@@ -74,7 +74,7 @@ fn load(mesh: &Option<PathBuf>, grid: Option<usize>) -> Result<(String, ControlM
             if n == 0 {
                 return Err(Error::new(ErrorKind::Usage, "--grid must be at least 1"));
             }
-            Ok((format!("grid {n}"), generate::grid(n)))
+            Ok((format!("grid {n}"), generate::try_grid(n)?))
         }
         _ => Err(Error::new(
             ErrorKind::Usage,

@@ -99,7 +99,7 @@ pub struct BenchGpuArgs {
 pub fn bench_gpu(args: &BenchGpuArgs) -> Result<String> {
     let mesh = match (&args.mesh, args.grid) {
         (Some(p), _) => crate::mesh::obj::read_obj(p)?,
-        (None, Some(n)) => crate::mesh::generate::grid(n),
+        (None, Some(n)) => crate::mesh::generate::try_grid(n)?,
         (None, None) => {
             return Err(Error::new(
                 ErrorKind::Usage,
@@ -118,10 +118,7 @@ pub fn bench_gpu(args: &BenchGpuArgs) -> Result<String> {
     let bvh = MeshBvh::build(d);
     let ctx = GpuContext::new(args.adapter.as_deref())?;
     let tracer = GpuTracer::new(&ctx, PackedScene::from_mesh(&bvh)?, TraceOptions::default())?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.max(1))
-        .build()
-        .map_err(|e| Error::new(ErrorKind::Usage, e.to_string()))?;
+    let pool = crate::threads::pool(args.threads.max(1))?;
     let bounds = bvh.bounds();
     let sets: [(&str, Vec<Ray>); 2] = [
         ("coherent", crate::cli_trace::camera_rays(bounds, args.rays)),

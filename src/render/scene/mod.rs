@@ -18,6 +18,13 @@ use raw::RawFile;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
+/// Largest image width and height (scene keys `render.width`/`height`, `render --res`).
+pub const MAX_RESOLUTION: u32 = 16384;
+/// Largest samples per pixel (`render.spp`, `render --spp`).
+pub const MAX_SPP: u32 = 1 << 20;
+/// Largest path depth (`render.max_depth`, `render --max-depth`).
+pub const MAX_DEPTH: u32 = 1024;
+
 /// Render settings (`[render]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -183,16 +190,16 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             Ok(x as u32)
         };
         if let Some(v) = &r.width {
-            render.width = int(v, 1, 16384)?;
+            render.width = int(v, 1, MAX_RESOLUTION as i64)?;
         }
         if let Some(v) = &r.height {
-            render.height = int(v, 1, 16384)?;
+            render.height = int(v, 1, MAX_RESOLUTION as i64)?;
         }
         if let Some(v) = &r.spp {
-            render.spp = int(v, 1, 1 << 20)?;
+            render.spp = int(v, 1, MAX_SPP as i64)?;
         }
         if let Some(v) = &r.max_depth {
-            render.max_depth = int(v, 0, 1024)?;
+            render.max_depth = int(v, 0, MAX_DEPTH as i64)?;
         }
         if let Some(v) = &r.seed {
             render.seed = int(v, 0, u32::MAX as i64)?;
