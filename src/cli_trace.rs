@@ -1,5 +1,6 @@
 //! The `dice`, `trace` and `accuracy` subcommands: diced meshes as OBJ, line-oriented ray
-//! queries (`ox oy oz dx dy dz` in, `hit t face k u v nx ny nz` or `miss` out), and the
+//! queries (`ox oy oz dx dy dz` in, `hit t face k u v nx ny nz` (plus a refined flag with
+//! `--exact`) or `miss` out), and the
 //! accuracy table of diced hits against the exact limit surface.
 
 use crate::bvh::exact::refine_hit;
