@@ -29,14 +29,17 @@ pub mod error;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod harness;
-#[cfg(feature = "render")]
 pub mod io;
+pub mod lines;
+pub mod memory;
 pub mod mesh;
+pub mod numeric;
 pub mod patch;
 pub mod refine;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod surface;
+pub mod threads;
 pub mod vec3;
 
 pub use bvh::exact::ExactHit;

@@ -772,9 +772,18 @@ fn tagged_template_parses() {
     assert_eq!(m.holes, vec![5]);
     assert_eq!(m.options.boundary, BoundaryInterpolation::EdgeOnly);
     assert_eq!(m.options.crease_method, CreaseMethod::Chaikin);
-    // Some faces have vt indices and others not: dropped with a warning; plus the edit.
+    // Some faces have vt indices and others not: dropped with a warning; plus the edit, and
+    // `ec 3 1 2` repeating the edge 0-1 of the first crease tag (the later value is used).
     assert!(m.face_uvs.is_empty());
-    assert_eq!(m.warnings.len(), 2, "{:?}", m.warnings);
+    assert_eq!(m.warnings.len(), 3, "{:?}", m.warnings);
+    assert!(
+        m.warnings.iter().any(|w| w.starts_with(
+            "test.obj:26: ec: the edge between vertices 0 and 1 (0-based) is already tagged \
+             with sharpness 2.5 at line 19; the later sharpness 3 is used"
+        )),
+        "{:?}",
+        m.warnings
+    );
 }
 
 proptest! {
@@ -889,4 +898,113 @@ fn opensubdiv_shapes_parse() {
         paths.len()
     );
     assert!(failures.is_empty(), "failures: {failures:#?}");
+}
+
+// --- Hostile input (issue 13) -------------------------------------------------------------
+
+#[test]
+fn byte_order_mark_is_skipped() {
+    let m = ok(&format!("\u{feff}{CUBE}"));
+    assert_eq!(m.num_vertices(), 8);
+    assert_eq!(m.positions[0], [-1.0, -1.0, 1.0]);
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+}
+
+#[test]
+fn text_that_is_not_obj_is_an_error() {
+    let e = err("");
+    assert_eq!(e.kind, ErrorKind::Parse);
+    assert_eq!(
+        e.to_string(),
+        "test.obj:1: file: not an OBJ mesh: no 'v' or 'f' statement in 0 statements"
+    );
+    let e = err("[camera]\nposition = [0, 1, 5]\nfov = 40\n");
+    assert_eq!(
+        e.to_string(),
+        "test.obj:1: file: not an OBJ mesh: no 'v' or 'f' statement in 3 statements (the \
+         first, at line 1, is '[camera]')"
+    );
+    // Mostly prose with a stray line that happens to start with "v".
+    let text = "This is a README.\nIt has lines.\nv 0 0 0\nAnd more lines.\n";
+    let e = err(text);
+    assert!(
+        e.to_string()
+            .starts_with("test.obj:1: file: not an OBJ mesh: 3 of 4 statements are not OBJ"),
+        "{e}"
+    );
+    // Binary data (a NUL byte), on its line.
+    let e = err("v 0 0 0\nv 1 0 0\n\u{0}\u{1}\u{2}");
+    assert_eq!(
+        e.to_string(),
+        "test.obj:3: file: contains a NUL byte: this is binary data, not an OBJ file"
+    );
+    // Vertices without faces: no surface.
+    let e = err("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    assert_eq!(
+        e.to_string(),
+        "test.obj:3: file: no faces: 3 vertices but no 'f' statement, so there is no surface"
+    );
+    // Other OBJ statements (lines, points, free-form curves) are OBJ: warned about, not refused.
+    let m = ok(&format!("{CUBE}l 1 2\np 3\ncstype bspline\n"));
+    assert_eq!(m.num_faces(), 6);
+}
+
+#[test]
+fn non_utf8_bytes_are_located() {
+    // A Latin-1 comment is harmless; a Latin-1 byte in a number is an error on its line.
+    let dir = std::env::temp_dir().join(format!("limitray-obj-utf8-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = dir.join("latin1-comment.obj");
+    let mut bytes = b"# cr\xe9\xe9 par un outil\n".to_vec();
+    bytes.extend_from_slice(CUBE.as_bytes());
+    std::fs::write(&good, &bytes).unwrap();
+    assert_eq!(limitray::mesh::obj::read_obj(&good).unwrap().num_faces(), 6);
+    let bad = dir.join("latin1-number.obj");
+    let mut bytes = CUBE.as_bytes().to_vec();
+    bytes.extend_from_slice(b"v 1\xb70 0 0\n");
+    std::fs::write(&bad, &bytes).unwrap();
+    let e = limitray::mesh::obj::read_obj(&bad).unwrap_err();
+    assert_eq!(e.line, Some(15), "{e}");
+    assert!(e.to_string().contains("invalid number"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn coordinates_outside_the_numeric_contract_are_refused() {
+    // 1e39 overflows f32, 1e20 made obvhs panic, 3e13 gave `hit inf`: all beyond 2^32.
+    for (x, shown) in [("1e39", "1e39"), ("-1e20", "-1e20"), ("3e13", "3e13")] {
+        let text = CUBE.replacen("v 1 1 1", &format!("v {x} 1 1"), 1);
+        let e = err(&text);
+        assert_eq!(e.line, Some(4), "{e}");
+        assert_eq!(e.element.as_deref(), Some("vertex 3"), "{e}");
+        assert!(
+            e.to_string()
+                .contains(&format!("coordinate {shown} 1e0 1e0 is out of range")),
+            "{e}"
+        );
+        assert!(e.to_string().contains("2^32"), "{e}");
+    }
+    // The bound itself is accepted.
+    let text = CUBE.replacen("v 1 1 1", "v 4294967296 -4294967296 1", 1);
+    assert_eq!(ok(&text).positions[3], [4294967296.0, -4294967296.0, 1.0]);
+}
+
+#[test]
+fn repeated_tags_warn_and_the_later_value_wins() {
+    let m = ok(&format!(
+        "{CUBE}t crease 2/1 0 1 2\nt crease 2/1 1 0 4\nt corner 1/1 2 1\nt corner 1/1 2 3\n"
+    ));
+    assert_eq!(m.creases.len(), 2);
+    assert_eq!(m.warnings.len(), 2, "{:?}", m.warnings);
+    assert_eq!(
+        m.warnings[0],
+        "test.obj:16: tag crease: the edge between vertices 0 and 1 (0-based) is already \
+         tagged with sharpness 2 at line 15; the later sharpness 4 is used, as in OpenSubdiv"
+    );
+    assert!(m.warnings[1].starts_with("test.obj:18: tag corner: vertex 2 (0-based)"));
+    // The later sharpness is the one refinement uses.
+    let (level, _) = limitray::refine::Level::base(&m, &m.options).unwrap();
+    let e = level.topo.find_edge(0, 1).unwrap() as usize;
+    assert_eq!(level.edge_sharpness[e], 4.0);
+    assert_eq!(level.vertex_sharpness[2], 3.0);
 }

@@ -280,14 +280,22 @@ pub(crate) fn build_deep<T: Send>(f: impl FnOnce() -> T + Send) -> T {
     }
 }
 
-/// Normalises `v` (zero stays zero).
+/// Normalises `v` (zero stays zero). Where the squared length is not a normal `f32`
+/// (cross products of edges near [`crate::numeric::MAX_COORD`] reach `2^67`, whose square
+/// overflows; tiny ones underflow), the vector is first divided by its largest component.
 pub fn normalize(v: [f32; 3]) -> [f32; 3] {
-    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    if l > 0.0 {
-        [v[0] / l, v[1] / l, v[2] / l]
-    } else {
-        v
+    let l2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if l2.is_finite() && l2 >= f32::MIN_POSITIVE {
+        let l = l2.sqrt();
+        return [v[0] / l, v[1] / l, v[2] / l];
     }
+    let m = v[0].abs().max(v[1].abs()).max(v[2].abs());
+    if !(m > 0.0 && m.is_finite()) {
+        return v;
+    }
+    let w = v.map(|x| x / m);
+    let l = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    [w[0] / l, w[1] / l, w[2] / l]
 }
 
 /// The obvhs hit mask of `node`'s children whose exact boxes `b` the ray `r` meets

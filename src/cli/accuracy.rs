@@ -66,6 +66,7 @@ pub fn accuracy_table(
         let acc = crate::harness::probe::accuracy(&table, &bvh, rays, diag, seed);
         let v = serde_json::json!({
             "rate": r,
+            "rate_used": r.min(args.max_rate.max(1)),
             "triangles": tris,
             "rays": acc.samples,
             "unrefined": acc.unrefined,

@@ -82,7 +82,7 @@ impl MeshSource {
                 if n == 0 {
                     return Err(Error::new(ErrorKind::Usage, "--grid must be at least 1"));
                 }
-                Ok((format!("grid {n}"), generate::grid(n)))
+                Ok((format!("grid {n}"), generate::try_grid(n)?))
             }
             _ => Err(Error::new(
                 ErrorKind::Usage,
@@ -153,23 +153,20 @@ impl ThreadArgs {
     }
 }
 
-/// Writes through `write` to `path`, or to standard output when `path` is `-`.
-pub fn write_output(
+/// An output file checked and opened before the work starts (`-`: standard output), written
+/// atomically through [`crate::io::output::Output`] and committed by [`finish_output`].
+pub fn open_output(path: &Path) -> Result<crate::io::output::Output> {
+    crate::io::output::Output::create(path)
+}
+
+/// Writes through `write` into `out` and commits it (the target is replaced only on success).
+pub fn finish_output(
+    mut out: crate::io::output::Output,
     path: &Path,
-    write: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+    write: impl FnOnce(&mut crate::io::output::Output) -> std::io::Result<()>,
 ) -> Result<()> {
-    let io_err = |e: std::io::Error| {
+    write(&mut out).map_err(|e| {
         Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string())
-    };
-    if path.as_os_str() == "-" {
-        let stdout = std::io::stdout();
-        let mut w = std::io::BufWriter::new(stdout.lock());
-        write(&mut w).map_err(io_err)?;
-        std::io::Write::flush(&mut w).map_err(io_err)
-    } else {
-        let f = std::fs::File::create(path).map_err(io_err)?;
-        let mut w = std::io::BufWriter::new(f);
-        write(&mut w).map_err(io_err)?;
-        std::io::Write::flush(&mut w).map_err(io_err)
-    }
+    })?;
+    out.commit()
 }

@@ -1,6 +1,6 @@
 //! `limitray dice`: the diced limit surface as OBJ.
 
-use super::args::{load, write_output, DiceArgs, RuleArgs};
+use super::args::{finish_output, load, open_output, DiceArgs, RuleArgs};
 use crate::dice::{dice, DicedMesh};
 use crate::error::Result;
 use crate::mesh::obj::ObjWriter;
@@ -25,9 +25,10 @@ pub struct DiceCmd {
 
 /// Runs `limitray dice`.
 pub fn run(args: &DiceCmd) -> Result<()> {
+    let out = open_output(&args.output)?;
     let m = load(&args.mesh)?;
     let (_, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
-    write_output(&args.output, |w| write_diced(w, &d))
+    finish_output(out, &args.output, |w| write_diced(w, &d))
 }
 
 /// Builds the patch table and dices `mesh` under `options`.
@@ -44,6 +45,14 @@ pub fn dice_mesh(
             ..PatchOptions::default()
         },
     )?;
+    if args.edge_length.is_none() && args.rate > args.max_rate.max(1) {
+        eprintln!(
+            "warning: rate {} is above --max-rate {}; {} segments per edge are used",
+            args.rate,
+            args.max_rate,
+            args.max_rate.max(1)
+        );
+    }
     let d = dice(&table, mesh, &args.options())?;
     Ok((table, d))
 }

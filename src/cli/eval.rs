@@ -57,18 +57,19 @@ fn parse_sample(line: &str) -> std::result::Result<FaceCoord, String> {
 }
 
 /// Reads samples from `input`, writes one line per input line to `output` (nine `nan` for a bad
-/// sample, with a message naming the line on stderr). Returns an error at the end if any line
-/// was bad.
+/// sample, invalid UTF-8 included, with a `stdin:LINE:` message on stderr). Streams: one line
+/// in memory at a time ([`crate::lines`]). Returns an error at the end if any line was bad.
 pub fn run(table: &PatchTable, input: impl BufRead, mut output: impl Write) -> Result<()> {
     let mut bad = 0usize;
     let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
-    for (i, line) in input.lines().enumerate() {
-        let line = line.map_err(io)?;
-        if line.trim().is_empty() {
+    for item in crate::lines::lines(input) {
+        let (number, line) = item.map_err(io)?;
+        if line.as_ref().is_ok_and(|l| l.trim().is_empty()) {
             writeln!(output).map_err(io)?;
             continue;
         }
-        let res = parse_sample(&line)
+        let res = line
+            .and_then(|l| parse_sample(&l))
             .map_err(|m| Error::new(ErrorKind::Parse, m))
             .and_then(|at| table.eval(at));
         match res {
@@ -91,7 +92,7 @@ pub fn run(table: &PatchTable, input: impl BufRead, mut output: impl Write) -> R
             }
             Err(e) => {
                 bad += 1;
-                eprintln!("stdin:{}: {}", i + 1, e);
+                eprintln!("stdin:{number}: {e}");
                 writeln!(output, "nan nan nan nan nan nan nan nan nan").map_err(io)?;
             }
         }

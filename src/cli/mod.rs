@@ -34,6 +34,14 @@ pub struct Cli {
     /// The subcommand.
     #[command(subcommand)]
     pub command: Command,
+    /// Memory budget (e.g. 8G, 512M): work whose estimated size is above it stops with an
+    /// error before allocating (default: three quarters of physical memory).
+    #[arg(long, global = true, value_parser = parse_memory)]
+    pub memory_limit: Option<u64>,
+}
+
+fn parse_memory(s: &str) -> std::result::Result<u64, String> {
+    crate::memory::parse_size(s).map_err(|e| e.message)
 }
 
 /// The subcommands.
@@ -120,6 +128,9 @@ pub fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
+    if let Some(bytes) = cli.memory_limit {
+        crate::memory::set_limit(bytes);
+    }
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

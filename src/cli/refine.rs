@@ -1,6 +1,6 @@
 //! `limitray refine`: uniform refinement to level N, written as OBJ.
 
-use super::args::{load, write_output, RuleArgs};
+use super::args::{finish_output, load, open_output, RuleArgs};
 use crate::error::Result;
 use crate::mesh::obj::write_obj;
 use crate::refine::Refiner;
@@ -27,6 +27,7 @@ pub struct RefineCmd {
 
 /// Runs `limitray refine`.
 pub fn run(args: &RefineCmd) -> Result<()> {
+    let out = open_output(&args.output)?;
     let m = load(&args.mesh)?;
     let opts = args.rules.options(&m);
     let level = args.level;
@@ -47,5 +48,5 @@ pub fn run(args: &RefineCmd) -> Result<()> {
             offsets.push(verts.len() as u32);
         }
     }
-    write_output(&args.output, |w| write_obj(w, &pos, &offsets, &verts))
+    finish_output(out, &args.output, |w| write_obj(w, &pos, &offsets, &verts))
 }

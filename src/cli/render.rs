@@ -1,6 +1,7 @@
 //! The `render` subcommand: scene file → EXR (beauty + AOVs) and an optional PNG preview.
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::io::output::Output;
 use crate::render::{read_scene, World};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::PathBuf;
@@ -20,7 +21,8 @@ pub enum Backend {
 pub struct RenderArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
-    /// Output EXR file (RGBA + AOVs).
+    /// Output EXR file (RGBA + AOVs); '-' for standard output. Written to a temporary file
+    /// and renamed over the target when complete; checked before the render starts.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
     /// Also write a tone-mapped sRGB PNG preview.
@@ -69,8 +71,9 @@ fn parse_res(s: &str) -> std::result::Result<(u32, u32), String> {
         .trim()
         .parse()
         .map_err(|_| format!("bad height in '{s}'"))?;
-    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
-        return Err(format!("resolution {w}x{h} out of range 1..=16384"));
+    let max = crate::render::scene::MAX_RESOLUTION;
+    if !(1..=max).contains(&w) || !(1..=max).contains(&h) {
+        return Err(format!("resolution {w}x{h} out of range 1..={max}"));
     }
     Ok((w, h))
 }
@@ -90,30 +93,38 @@ pub struct RenderReport {
 
 /// Runs `limitray render`.
 pub fn run(args: &RenderArgs) -> Result<RenderReport> {
-    if args.spp == Some(0) {
-        return Err(Error::new(ErrorKind::Usage, "--spp must be at least 1"));
+    use crate::render::scene::{MAX_DEPTH, MAX_SPP};
+    if let Some(s) = args.spp.filter(|s| !(1..=MAX_SPP).contains(s)) {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!("--spp {s} is outside 1..={MAX_SPP} (the scene's render.spp range)"),
+        ));
+    }
+    if let Some(d) = args.max_depth.filter(|&d| d > MAX_DEPTH) {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!("--max-depth {d} is above {MAX_DEPTH} (the scene's render.max_depth range)"),
+        ));
     }
     let pool = crate::harness::pool(args.threads)?;
     pool.install(|| render_in_pool(args))
 }
 
-/// Fails early (before a long render) when an output file's folder does not exist.
-fn check_output(path: &std::path::Path) -> Result<()> {
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::new(
-            ErrorKind::Io,
-            format!("folder {} does not exist", dir.display()),
-        )
-        .in_file(path.display().to_string())),
-        _ => Ok(()),
-    }
-}
-
 fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
-    check_output(&args.output)?;
-    for p in [&args.png, &args.levels_png].into_iter().flatten() {
-        check_output(p)?;
+    // Every output path is checked (and its temporary file made) before any work.
+    let paths: Vec<&PathBuf> = std::iter::once(&args.output)
+        .chain(args.png.iter())
+        .chain(args.levels_png.iter())
+        .collect();
+    if paths.iter().filter(|p| p.as_os_str() == "-").count() > 1 {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "only one output can be standard output ('-')",
+        ));
     }
+    let mut exr_out = Output::create(&args.output)?;
+    let mut png_out = args.png.as_deref().map(Output::create).transpose()?;
+    let mut levels_out = args.levels_png.as_deref().map(Output::create).transpose()?;
     let desc = read_scene(&args.scene)?;
     let mut settings = desc.render;
     if let Some(s) = args.spp {
@@ -208,12 +219,16 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
     let film = world.render(&progress);
     let render_s = t0.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    crate::render::output::write_film(&args.output, &film)?;
-    if let Some(png) = &args.png {
-        crate::render::output::write_preview(png, &film, settings.exposure)?;
+    crate::render::output::write_film_to(&mut exr_out, &film)?;
+    if let Some(out) = &mut png_out {
+        crate::render::output::write_preview_to(out, &film, settings.exposure)?;
     }
-    if let Some(png) = &args.levels_png {
-        crate::render::output::write_levels_preview(png, &film, settings.exposure)?;
+    if let Some(out) = &mut levels_out {
+        crate::render::output::write_levels_preview_to(out, &film, settings.exposure)?;
+    }
+    exr_out.commit()?;
+    for out in [png_out, levels_out].into_iter().flatten() {
+        out.commit()?;
     }
     let samples = settings.width as f64 * settings.height as f64 * settings.spp as f64;
     let report = RenderReport {

@@ -1,5 +1,5 @@
 //! `limitray trace`: line-oriented ray queries (`ox oy oz dx dy dz` in, `hit t face k u v nx ny
-//! nz` or `miss` out) on the CPU or, with `--backend gpu`, on a Vulkan adapter.
+//! nz` (plus a refined flag with `--exact`) or `miss` out) on the CPU or, with `--backend gpu`, on a Vulkan adapter.
 
 use super::args::{load, DiceArgs, RuleArgs};
 use super::dice::dice_mesh;
@@ -95,9 +95,11 @@ fn parse_ray(line: &str) -> std::result::Result<Ray, String> {
 
 /// Reads rays from `input` and writes one line per input line: `hit t face k u v nx ny nz`
 /// (the normal is the limit-surface shading normal), `miss`, or nine `nan` fields for a bad
-/// line (with `stdin:LINE: …` on stderr and an error at the end). With `exact`, each hit is
-/// refined onto the exact limit surface (`f64`, Newton) and that is printed instead; a hit that
-/// cannot be refined prints the diced hit.
+/// line, invalid UTF-8 included (with `stdin:LINE: …` on stderr and an error at the end). With
+/// `exact`, each hit is refined onto the exact limit surface (`f64`, Newton) and that is
+/// printed, followed by a tenth field: `1` for a refined hit, `0` for a hit that could not be
+/// refined (the diced hit is printed then). Input is read and answered in batches of
+/// [`TRACE_BATCH`] lines, so memory does not grow with the input.
 pub fn trace(
     bvh: &MeshBvh,
     table: &PatchTable,
@@ -110,61 +112,90 @@ pub fn trace(
     })
 }
 
+/// Lines answered per batch by [`trace`].
+pub const TRACE_BATCH: usize = 1 << 16;
+
+/// A parsed input line: blank, a ray, or why it is bad.
+type Parsed = std::result::Result<Option<Ray>, String>;
+
 /// [`trace`] with the closest hits of the parsed rays computed by `hits` (one result per ray,
-/// in order): the GPU backend plugs in here.
+/// in order, called once per batch): the GPU backend plugs in here.
 pub fn trace_with(
     table: &PatchTable,
     exact: bool,
     input: impl BufRead,
     mut output: impl Write,
-    hits: impl FnOnce(&[Ray]) -> Result<Vec<Option<crate::bvh::Hit>>>,
+    mut hits: impl FnMut(&[Ray]) -> Result<Vec<Option<crate::bvh::Hit>>>,
 ) -> Result<()> {
     let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
-    let mut lines = Vec::new();
-    for line in input.lines() {
-        lines.push(line.map_err(io)?);
-    }
-    let parsed: Vec<Option<std::result::Result<Ray, String>>> = lines
-        .iter()
-        .map(|l| (!l.trim().is_empty()).then(|| parse_ray(l)))
-        .collect();
-    let rays: Vec<Ray> = parsed
-        .iter()
-        .filter_map(|p| p.as_ref().and_then(|r| r.as_ref().ok()).copied())
-        .collect();
-    let hits = hits(&rays)?;
-    let mut next = hits.into_iter().zip(rays.iter());
     let mut bad = 0;
-    for (i, p) in parsed.iter().enumerate() {
-        match p {
-            None => writeln!(output).map_err(io)?,
-            Some(Err(m)) => {
-                bad += 1;
-                eprintln!("stdin:{}: {m}", i + 1);
-                writeln!(output, "nan nan nan nan nan nan nan nan nan").map_err(io)?;
-            }
-            Some(Ok(_)) => {
-                let (h, ray) = next.next().expect("one result per ray");
-                match h {
-                    None => writeln!(output, "miss").map_err(io)?,
-                    Some(h) => match exact.then(|| refine_hit(table, ray, &h)).flatten() {
-                        Some(x) => writeln!(
+    let mut batch: Vec<(usize, Parsed)> = Vec::new();
+    let mut answer = |batch: &mut Vec<(usize, Parsed)>, output: &mut dyn Write| -> Result<()> {
+        let rays: Vec<Ray> = batch
+            .iter()
+            .filter_map(|(_, p)| p.as_ref().ok().copied().flatten())
+            .collect();
+        let results = hits(&rays)?;
+        if results.len() != rays.len() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "one hit result per ray expected",
+            ));
+        }
+        let mut next = results.into_iter().zip(rays.iter());
+        for (number, p) in batch.drain(..) {
+            match p {
+                Ok(None) => writeln!(output).map_err(io)?,
+                Err(m) => {
+                    bad += 1;
+                    eprintln!("stdin:{number}: {m}");
+                    writeln!(output, "nan nan nan nan nan nan nan nan nan").map_err(io)?;
+                }
+                Ok(Some(_)) => {
+                    let (h, ray) = next.next().expect("one result per ray");
+                    let Some(h) = h else {
+                        writeln!(output, "miss").map_err(io)?;
+                        continue;
+                    };
+                    match exact.then(|| refine_hit(table, ray, &h)) {
+                        Some(Some(x)) => writeln!(
                             output,
-                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
+                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?} 1",
                             x.t, x.face, x.k, x.u, x.v, x.n[0], x.n[1], x.n[2]
-                        )
-                        .map_err(io)?,
-                        None => writeln!(
+                        ),
+                        unrefined => writeln!(
                             output,
-                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
-                            h.t, h.face, h.k, h.u, h.v, h.ns[0], h.ns[1], h.ns[2]
-                        )
-                        .map_err(io)?,
-                    },
+                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}{}",
+                            h.t,
+                            h.face,
+                            h.k,
+                            h.u,
+                            h.v,
+                            h.ns[0],
+                            h.ns[1],
+                            h.ns[2],
+                            if unrefined.is_some() { " 0" } else { "" }
+                        ),
+                    }
+                    .map_err(io)?;
                 }
             }
         }
+        Ok(())
+    };
+    for item in crate::lines::lines(input) {
+        let (number, line) = item.map_err(io)?;
+        let parsed = match line {
+            Err(m) => Err(m),
+            Ok(l) if l.trim().is_empty() => Ok(None),
+            Ok(l) => parse_ray(&l).map(Some),
+        };
+        batch.push((number, parsed));
+        if batch.len() >= TRACE_BATCH {
+            answer(&mut batch, &mut output)?;
+        }
     }
+    answer(&mut batch, &mut output)?;
     output.flush().map_err(io)?;
     if bad > 0 {
         return Err(

@@ -17,11 +17,13 @@
 //! (sharp creases, corners, non-manifold edges), where the two sides have different normals,
 //! does a side vertex get a copy per domain: the copy's position is the same `f32` bits.
 
+pub mod estimate;
 mod pattern;
 mod rates;
 
+pub use estimate::DiceEstimate;
 pub use pattern::{pattern, side_uv, Pattern};
-pub use rates::{edge_rates, DiceRate, ScreenRate};
+pub use rates::{edge_rates, DiceRate, Rates, ScreenRate};
 
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
@@ -161,7 +163,19 @@ struct Shared {
     spoke_first: Vec<u32>,
 }
 
-/// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles.
+/// Upper bounds on the size of [`dice`]'s result, from the edge rates alone.
+pub fn estimate_size(
+    table: &PatchTable,
+    mesh: &ControlMesh,
+    opts: &DiceOptions,
+) -> Result<DiceEstimate> {
+    let (level, _) = Level::base(mesh, &table.mesh_options)?;
+    let rates = edge_rates(table, &level, opts)?;
+    Ok(estimate::estimate(&level, &rates))
+}
+
+/// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
+/// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
     let (level, _) = Level::base(mesh, &table.mesh_options)?;
     if table.num_faces() != level.num_faces() {
@@ -173,6 +187,11 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     let topo = &level.topo;
     let live = |f: usize| !level.face_hole[f];
     let rates = edge_rates(table, &level, opts)?;
+    crate::memory::check(
+        "dicing",
+        estimate::estimate(&level, &rates).bytes(),
+        "lower the dicing rate (--rate, or the scene's rate, max_rate or pixels_per_edge)",
+    )?;
 
     // Entities with a seam: infinitely sharp edges, and vertices with one such edge or an
     // infinitely sharp corner.

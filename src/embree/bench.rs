@@ -477,10 +477,7 @@ pub fn bench(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport> {
     } else {
         opts.threads
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::new(ErrorKind::Usage, format!("thread pool: {e}")))?;
+    let pool = crate::threads::pool(threads)?;
     let opts = BenchOptions { threads, ..*opts };
     pool.install(|| bench_in_pool(mesh, &opts))
 }

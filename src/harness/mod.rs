@@ -8,7 +8,7 @@ pub mod probe;
 pub mod rays;
 pub mod rng;
 
-use crate::error::{Error, ErrorKind, Result};
+use crate::error::Result;
 
 /// `threads`, or the machine's available parallelism when `threads` is 0.
 pub fn thread_count(threads: usize) -> usize {
@@ -19,10 +19,8 @@ pub fn thread_count(threads: usize) -> usize {
     }
 }
 
-/// A rayon pool of [`thread_count`]`(threads)` worker threads.
+/// A rayon pool of [`thread_count`]`(threads)` worker threads, through [`crate::threads::pool`]
+/// (the one cap on `--threads`).
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(thread_count(threads))
-        .build()
-        .map_err(|e| Error::new(ErrorKind::Usage, format!("cannot start thread pool: {e}")))
+    crate::threads::pool(thread_count(threads))
 }

@@ -1,31 +1,38 @@
 //! OpenEXR reading and writing of named `f32` planes, through the `exr` crate: one layer, ZIP
 //! compression in scan lines of 16, lines in increasing order (so that the same planes always
-//! give the same bytes). The renderer's channel set is [`crate::render::output`]'s.
+//! give the same bytes). The renderer's channel set is [`crate::render::output`]'s. Files are
+//! written through [`Output`] (checked path, atomic replacement).
 
+use super::output::Output;
 use crate::error::{Error, ErrorKind, Result};
 use ::exr::prelude::*;
-use std::path::Path;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::new(ErrorKind::Io, e.to_string()).in_file(path.display().to_string())
 }
 
-/// Writes named `f32` planes (row-major, `width × height` each) as one EXR layer.
-pub fn write_planes(
-    path: &Path,
+/// Encodes named `f32` planes (row-major, `width × height` each) as one EXR layer, in
+/// memory. `name` labels errors.
+pub fn encode_planes(
+    name: &Path,
     width: usize,
     height: usize,
     planes: Vec<(&str, Vec<f32>)>,
-) -> Result<()> {
+) -> Result<Vec<u8>> {
     if width == 0 || height == 0 {
-        return Err(io_error(path, "cannot write an empty image"));
+        return Err(io_error(name, "cannot write an empty image"));
     }
     let mut list = ::exr::prelude::SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
-    for (name, data) in planes {
+    for (channel, data) in planes {
         if data.len() != width * height {
-            return Err(io_error(path, format!("channel {name} has the wrong size")));
+            return Err(io_error(
+                name,
+                format!("channel {channel} has the wrong size"),
+            ));
         }
-        list.push(AnyChannel::new(name, FlatSamples::F32(data)));
+        list.push(AnyChannel::new(channel, FlatSamples::F32(data)));
     }
     let layer = Layer::new(
         (width, height),
@@ -33,10 +40,67 @@ pub fn write_planes(
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
+    let mut bytes = std::io::Cursor::new(Vec::new());
     Image::from_layer(layer)
         .write()
-        .to_file(path)
-        .map_err(|e| io_error(path, e))
+        .to_buffered(&mut bytes)
+        .map_err(|e| io_error(name, e))?;
+    Ok(bytes.into_inner())
+}
+
+/// Writes named `f32` planes (row-major, `width × height` each) as one EXR layer to `path`
+/// (`-`: standard output) through [`Output`]: an existing file is replaced only by a complete
+/// one, and never touched when writing fails.
+pub fn write_planes(
+    path: &Path,
+    width: usize,
+    height: usize,
+    planes: Vec<(&str, Vec<f32>)>,
+) -> Result<()> {
+    let mut out = Output::create(path)?;
+    write_planes_to(&mut out, width, height, planes)?;
+    out.commit()
+}
+
+/// [`write_planes`] into an output opened (and so checked) before the work started; the
+/// caller commits it.
+pub fn write_planes_to(
+    out: &mut Output,
+    width: usize,
+    height: usize,
+    planes: Vec<(&str, Vec<f32>)>,
+) -> Result<()> {
+    let name = PathBuf::from(out.name());
+    let bytes = encode_planes(&name, width, height, planes)?;
+    out.write_all(&bytes).map_err(|e| io_error(&name, e))
+}
+
+/// Bytes [`read_channels`] needs for a layer of `width × height` with `channels` channels:
+/// the decoded samples (at most 4 bytes each) and their `f32` copies.
+pub fn read_bytes(width: u64, height: u64, channels: u64) -> f64 {
+    width as f64 * height as f64 * channels.max(1) as f64 * 8.0
+}
+
+/// Checks the header's data windows against the memory budget before any pixel is decoded
+/// (a corrupt or hostile header can claim 10^6 × 10^6 pixels).
+fn check_header(path: &Path) -> Result<()> {
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| io_error(path, e))?;
+    let mut total = 0.0;
+    for h in meta.headers.iter() {
+        let (w, hgt) = (h.layer_size.0 as u64, h.layer_size.1 as u64);
+        total += read_bytes(w, hgt, h.channels.list.len() as u64);
+    }
+    let first = meta.headers.first().map_or((0, 0), |h| h.layer_size.into());
+    crate::memory::check(
+        &format!(
+            "reading the {} × {} EXR image {}",
+            first.0,
+            first.1,
+            path.display()
+        ),
+        total,
+        "use a smaller image",
+    )
 }
 
 /// All channels of the first layer of an EXR file, converted to `f32`.
@@ -60,8 +124,10 @@ impl ExrChannels {
     }
 }
 
-/// Reads every channel of the first layer (largest resolution level, no deep data).
+/// Reads every channel of the first layer (largest resolution level, no deep data). The
+/// header is checked against the memory budget ([`crate::memory`]) first.
 pub fn read_channels(path: &Path) -> Result<ExrChannels> {
+    check_header(path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -49,9 +49,42 @@ pub fn grid(n: usize) -> ControlMesh {
     }
 }
 
+/// Largest `n` of [`try_grid`]: `4n²` face-vertex indices must fit a `u32`.
+pub const MAX_GRID: usize = 32_767;
+
+/// [`grid`] after checking `n` (at most [`MAX_GRID`]) and the memory the mesh takes (positions
+/// 24 bytes a vertex, faces 20 bytes) against the budget ([`crate::memory`]), so that
+/// `--grid 100000` is an error rather than an out-of-memory abort.
+pub fn try_grid(n: usize) -> crate::Result<ControlMesh> {
+    if n > MAX_GRID {
+        return Err(crate::Error::new(
+            crate::ErrorKind::Usage,
+            format!("--grid {n} is above the maximum of {MAX_GRID} (4n² indices must fit 32 bits)"),
+        ));
+    }
+    let side = (n + 1) as f64;
+    crate::memory::check(
+        &format!("the {n} × {n} grid mesh"),
+        side * side * 24.0 + (n * n) as f64 * 20.0,
+        "lower --grid",
+    )?;
+    Ok(grid(n))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn try_grid_checks() {
+        assert_eq!(try_grid(3).unwrap(), grid(3));
+        let e = try_grid(100_000).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--grid 100000 is above the maximum of 32767 (4n² indices must fit 32 bits)"
+        );
+        assert!(crate::memory::check_with(1 << 30, "g", 32768.0 * 32768.0 * 44.0, "x").is_err());
+    }
 
     #[test]
     fn counts_and_layout() {

@@ -160,7 +160,8 @@ impl ControlMesh {
     }
 
     /// Checks everything that does not need edge topology: face sizes, index ranges, repeated
-    /// vertices in a face, finite coordinates, tag indices and sharpness values.
+    /// vertices in a face, coordinates (finite and within [`crate::numeric::MAX_COORD`]), tag
+    /// indices and sharpness values.
     /// Topology-level checks (non-manifold configurations) are made by [`Topology::new`].
     pub fn validate(&self) -> Result<()> {
         let nv = self.positions.len();
@@ -170,6 +171,19 @@ impl ControlMesh {
                     ErrorKind::Topology,
                     Element::Vertex(i),
                     format!("coordinate is not finite: {} {} {}", p[0], p[1], p[2]),
+                ));
+            }
+            if !crate::numeric::in_range(*p) {
+                return Err(self.error_at(
+                    ErrorKind::Topology,
+                    Element::Vertex(i),
+                    format!(
+                        "coordinate {:e} {:e} {:e} is out of range ({})",
+                        p[0],
+                        p[1],
+                        p[2],
+                        crate::numeric::contract()
+                    ),
                 ));
             }
         }

@@ -19,7 +19,15 @@
 //!   and `b`, which are 1-based like `f` indices (negative ones relative to the vertices read
 //!   so far).
 //! * `o`, `g`, `s`, `usemtl` and `mtllib` are ignored; other statements are ignored with a
-//!   warning. `#` starts a comment anywhere on a line.
+//!   warning. `#` starts a comment anywhere on a line. A UTF-8 byte-order mark at the start
+//!   is skipped.
+//!
+//! A crease or corner tag that repeats an edge or vertex already tagged gives a warning;
+//! the later sharpness is used, as OpenSubdiv (which sets the sharpness tag by tag) does.
+//!
+//! Text that is not an OBJ file is an error rather than an empty mesh: a NUL byte (binary
+//! data), no `v` and no `f` statement at all, more statements that are not OBJ keywords than
+//! statements that are, or no face.
 //!
 //! Sharpness values at or above [`super::SHARPNESS_INFINITE`] are infinitely sharp; they are
 //! kept as written. Syntax errors are [`ErrorKind::Parse`] errors that name the file, line and
@@ -38,6 +46,39 @@ use std::path::Path;
 /// counted.
 const WARNINGS_PER_KIND: usize = 5;
 
+/// Statements of the OBJ format (free-form geometry, display and grouping) that are not read
+/// but make a file recognisably OBJ.
+const OTHER_OBJ_KEYWORDS: [&str; 28] = [
+    "l",
+    "p",
+    "vp",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "mg",
+    "lod",
+    "usemap",
+    "maplib",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "bevel",
+    "c_interp",
+    "d_interp",
+];
+
 /// Longest token quoted in a message, in characters.
 const QUOTE_CHARS: usize = 40;
 
@@ -47,6 +88,15 @@ const QUOTE_CHARS: usize = 40;
 /// checked with [`ControlMesh::validate`].
 pub fn parse_obj(text: &str, file: Option<&str>) -> Result<ControlMesh> {
     let mut p = Parser::new(file);
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if let Some(k) = text.find('\0') {
+        let line = text[..k].matches('\n').count() + 1;
+        return Err(p.err(
+            line,
+            "file",
+            "contains a NUL byte: this is binary data, not an OBJ file",
+        ));
+    }
     for (i, raw) in text.lines().enumerate() {
         let line = i.saturating_add(1);
         let content = match raw.find('#') {
@@ -66,8 +116,11 @@ pub fn parse_obj(text: &str, file: Option<&str>) -> Result<ControlMesh> {
 /// Reads and parses an OBJ file.
 pub fn read_obj(path: &Path) -> Result<ControlMesh> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)
         .map_err(|e| Error::new(ErrorKind::Io, e.to_string()).in_file(name.clone()))?;
+    // Bytes that are not UTF-8 (Latin-1 comments, binary data) become U+FFFD; in a statement
+    // they then fail as unknown keywords or invalid numbers, with their line.
+    let text = String::from_utf8_lossy(&bytes);
     parse_obj(&text, Some(&name))
 }
 
@@ -219,6 +272,13 @@ struct Parser {
     extra_components_warned: bool,
     /// How many statements of each ignored kind were met so far.
     ignored: HashMap<String, usize>,
+    /// Statements with an OBJ keyword, and without (with the line and keyword of the first).
+    known: usize,
+    unknown: usize,
+    first_unknown: Option<(usize, String)>,
+    /// Edges (lower vertex first) and vertices already tagged: entry index and line.
+    creased: HashMap<(u32, u32), (usize, usize)>,
+    cornered: HashMap<u32, (usize, usize)>,
 }
 
 impl Parser {
@@ -241,6 +301,11 @@ impl Parser {
             first_without_uv: None,
             extra_components_warned: false,
             ignored: HashMap::new(),
+            known: 0,
+            unknown: 0,
+            first_unknown: None,
+            creased: HashMap::new(),
+            cornered: HashMap::new(),
         }
     }
 
@@ -283,6 +348,18 @@ impl Parser {
     }
 
     fn statement(&mut self, line: usize, keyword: &str, args: &[&str]) -> Result<()> {
+        let is_obj = matches!(
+            keyword,
+            "v" | "vt" | "vn" | "f" | "t" | "ec" | "o" | "g" | "s" | "usemtl" | "mtllib"
+        ) || OTHER_OBJ_KEYWORDS.contains(&keyword);
+        if is_obj {
+            self.known += 1;
+        } else {
+            self.unknown += 1;
+            if self.first_unknown.is_none() {
+                self.first_unknown = Some((line, keyword.to_string()));
+            }
+        }
         match keyword {
             "v" => self.vertex(line, args),
             "vt" => self.texcoord(line, args),
@@ -708,10 +785,29 @@ impl Parser {
             let v0 = self.tag_index(line, el, pair[0], "vertex")?;
             let v1 = self.tag_index(line, el, pair[1], "vertex")?;
             let sharpness = if sharp.len() == 1 { sharp[0] } else { sharp[k] };
-            self.mesh.creases.push(EdgeCrease { v0, v1, sharpness });
-            self.mesh.provenance.crease_lines.push(l);
+            self.push_crease(line, el, EdgeCrease { v0, v1, sharpness }, l);
         }
         Ok(())
+    }
+
+    /// Adds a crease, warning when its edge is tagged already (the later value is used).
+    fn push_crease(&mut self, line: usize, el: &str, c: EdgeCrease, l: u32) {
+        let key = (c.v0.min(c.v1), c.v0.max(c.v1));
+        let index = self.mesh.creases.len();
+        if let Some((earlier, at)) = self.creased.insert(key, (index, line)) {
+            let before = self.mesh.creases[earlier].sharpness;
+            self.warn(
+                line,
+                format!(
+                    "{el}: the edge between vertices {} and {} (0-based) is already tagged \
+                     with sharpness {before} at line {at}; the later sharpness {} is used, \
+                     as in OpenSubdiv",
+                    key.0, key.1, c.sharpness
+                ),
+            );
+        }
+        self.mesh.creases.push(c);
+        self.mesh.provenance.crease_lines.push(l);
     }
 
     fn tag_corner(
@@ -731,6 +827,18 @@ impl Parser {
         for (k, t) in ints.iter().enumerate() {
             let vertex = self.tag_index(line, el, t, "vertex")?;
             let sharpness = if sharp.len() == 1 { sharp[0] } else { sharp[k] };
+            let index = self.mesh.corners.len();
+            if let Some((earlier, at)) = self.cornered.insert(vertex, (index, line)) {
+                let before = self.mesh.corners[earlier].sharpness;
+                self.warn(
+                    line,
+                    format!(
+                        "{el}: vertex {vertex} (0-based) is already tagged with sharpness \
+                     {before} at line {at}; the later sharpness {sharpness} is used, as in \
+                         OpenSubdiv"
+                    ),
+                );
+            }
             self.mesh.corners.push(VertexCorner { vertex, sharpness });
             self.mesh.provenance.corner_lines.push(l);
         }
@@ -771,12 +879,57 @@ impl Parser {
         let v0 = self.obj_index(line, "ec", a, IndexKind::Vertex)?;
         let v1 = self.obj_index(line, "ec", b, IndexKind::Vertex)?;
         let l = self.line32(line, "ec")?;
-        self.mesh.creases.push(EdgeCrease { v0, v1, sharpness });
-        self.mesh.provenance.crease_lines.push(l);
+        self.push_crease(line, "ec", EdgeCrease { v0, v1, sharpness }, l);
+        Ok(())
+    }
+
+    /// Refuses text that is not an OBJ mesh (see the module documentation).
+    fn check_is_obj(&self) -> Result<()> {
+        let unknown = match &self.first_unknown {
+            Some((line, k)) => format!(" (the first, at line {line}, is {})", quote(k)),
+            None => String::new(),
+        };
+        let line = self.first_unknown.as_ref().map_or(1, |(l, _)| *l);
+        if self.mesh.positions.is_empty() && self.mesh.num_faces() == 0 {
+            return Err(self.err(
+                line,
+                "file",
+                format!(
+                    "not an OBJ mesh: no 'v' or 'f' statement in {} statements{unknown}",
+                    self.known + self.unknown
+                ),
+            ));
+        }
+        if self.unknown > self.known {
+            return Err(self.err(
+                line,
+                "file",
+                format!(
+                    "not an OBJ mesh: {} of {} statements are not OBJ statements{unknown}",
+                    self.unknown,
+                    self.known + self.unknown
+                ),
+            ));
+        }
+        if self.mesh.num_faces() == 0 {
+            return Err(self.err(
+                self.mesh
+                    .provenance
+                    .vertex_lines
+                    .last()
+                    .map_or(1, |&l| l as usize),
+                "file",
+                format!(
+                    "no faces: {} vertices but no 'f' statement, so there is no surface",
+                    self.mesh.positions.len()
+                ),
+            ));
+        }
         Ok(())
     }
 
     fn finish(mut self) -> Result<ControlMesh> {
+        self.check_is_obj()?;
         if self.with_uv > 0 && self.without_uv > 0 {
             let line = self.first_without_uv.unwrap_or(0);
             let with = self.first_with_uv.unwrap_or(0);

@@ -29,6 +29,10 @@ use crate::refine::Level;
 /// Default maximum isolation level.
 pub const DEFAULT_MAX_LEVEL: usize = 10;
 
+/// Largest maximum isolation level accepted (by the library, the scene key `max_level` and
+/// the command line's `--max-level` alike); patch levels are stored in a byte.
+pub const MAX_LEVEL: usize = 16;
+
 /// Deepest on-demand subdivision inside an end cap; points closer than 2^-60 of the cap's size
 /// to a vertex take that vertex's exact limit position.
 const MAX_ON_DEMAND: usize = 60;
@@ -354,6 +358,15 @@ impl PatchTable {
 
     /// Builds the patch table with subdivision options overriding the mesh's.
     pub fn with_options(mesh: &ControlMesh, options: Options, opts: PatchOptions) -> Result<Self> {
+        if !(1..=MAX_LEVEL).contains(&opts.max_level) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "maximum isolation level {} is outside 1..={MAX_LEVEL}",
+                    opts.max_level
+                ),
+            ));
+        }
         let (base, _) = Level::base(mesh, &options)?;
         let method = options.crease_method;
         let opts = PatchOptions {

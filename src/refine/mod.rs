@@ -20,6 +20,31 @@ use crate::mesh::{ControlMesh, Options};
 /// Deepest uniform refinement the refiner accepts (each level has four times the faces).
 pub const MAX_LEVEL: usize = 12;
 
+/// Bytes of topology, tags and sharpness per face of a refined (all-quad, mostly valence-4)
+/// level: face, edge and vertex adjacency (152: about 38 `u32`s per face with two edges and
+/// one vertex per face) and per-element tags (13).
+const LEVEL_BYTES_PER_FACE: f64 = 165.0;
+/// Bytes of the stencil table that makes a level, per face of that level: 6.25 terms of 12
+/// bytes and one row offset of 4 bytes per vertex (one vertex per face).
+const STENCIL_BYTES_PER_FACE: f64 = 79.0;
+/// Allowance for vectors grown by doubling while a level is built.
+const GROWTH: f64 = 1.5;
+/// Bytes per vertex of the positions computed from the tables (two levels at a time, `f64`).
+const POSITION_BYTES_PER_FACE: f64 = 48.0;
+
+/// Upper estimate of the memory a [`Refiner`] to `max_level` and the positions of its last
+/// level take: level `l ≥ 1` has `4^(l-1)` quads per base face-vertex.
+pub fn estimate_bytes(mesh: &ControlMesh, max_level: usize) -> f64 {
+    let quads1 = mesh.face_verts.len() as f64;
+    let mut total = quads1 * LEVEL_BYTES_PER_FACE;
+    let mut faces = quads1;
+    for _ in 1..=max_level {
+        total += faces * (LEVEL_BYTES_PER_FACE + STENCIL_BYTES_PER_FACE) * GROWTH;
+        faces *= 4.0;
+    }
+    total + faces / 4.0 * POSITION_BYTES_PER_FACE
+}
+
 /// Uniform refinement of a control mesh to a fixed level: every level's topology and tags, and
 /// the stencil tables between consecutive levels.
 #[derive(Clone, Debug)]
@@ -48,6 +73,11 @@ impl Refiner {
                 format!("level {max_level} is above the maximum of {MAX_LEVEL}"),
             ));
         }
+        crate::memory::check(
+            &format!("uniform refinement to level {max_level}"),
+            estimate_bytes(mesh, max_level),
+            "lower the level (--level)",
+        )?;
         let (base, warnings) = Level::base(mesh, &options)?;
         let mut levels = vec![base];
         let mut tables = Vec::with_capacity(max_level);

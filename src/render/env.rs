@@ -42,6 +42,37 @@ pub enum Environment {
     },
 }
 
+/// Bad texels of a map, counted before it is used (the scene loader makes non-finite ones an
+/// error and warns about negative ones, which [`EnvMap::new`] reads as 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TexelReport {
+    /// Texels with a NaN or infinite component once scaled by the intensity.
+    pub non_finite: usize,
+    /// Index of the first of them (meaningful when `non_finite > 0`).
+    pub first_non_finite: usize,
+    /// Finite texels with a negative component.
+    pub negative: usize,
+}
+
+impl TexelReport {
+    /// Counts the bad texels of `texels` scaled by `intensity`.
+    pub fn new(texels: &[Vec3], intensity: f32) -> TexelReport {
+        let mut r = TexelReport::default();
+        for (i, &t) in texels.iter().enumerate() {
+            let s = t * intensity;
+            if !t.is_finite() || !s.is_finite() {
+                if r.non_finite == 0 {
+                    r.first_non_finite = i;
+                }
+                r.non_finite += 1;
+            } else if t.min_element() < 0.0 {
+                r.negative += 1;
+            }
+        }
+        r
+    }
+}
+
 impl EnvMap {
     /// A map from row-major texels, scaled by `intensity`. `None` when empty or with a size
     /// that does not match.

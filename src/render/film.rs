@@ -92,6 +92,13 @@ pub struct Film {
     pub pixels: Vec<PixelValue>,
 }
 
+/// Bytes a `width × height` render holds at its peak: the tiles' pixel values and the film
+/// (two [`PixelValue`]s a pixel), and, while the EXR is written, its 13 `f32` planes, the
+/// encoder's copy and the encoded file (156 bytes a pixel at worst).
+pub fn estimate_bytes(width: u32, height: u32) -> f64 {
+    width as f64 * height as f64 * (2.0 * std::mem::size_of::<PixelValue>() as f64 + 156.0)
+}
+
 impl Film {
     /// A film with every pixel at its default (black, transparent, miss).
     pub fn new(width: u32, height: u32) -> Film {

@@ -19,6 +19,7 @@
 
 use super::film::Film;
 use crate::error::Result;
+use crate::io::output::Output;
 use std::path::Path;
 
 /// The channel names written by [`write_film`], in the order of the table above.
@@ -27,9 +28,8 @@ pub const CHANNELS: [&str; 13] = [
     "level",
 ];
 
-/// Writes the film's beauty and AOVs (see the module documentation for the channels).
-pub fn write_film(path: &Path, film: &Film) -> Result<()> {
-    let planes = vec![
+fn film_planes(film: &Film) -> Vec<(&'static str, Vec<f32>)> {
+    vec![
         ("R", film.plane(|p| p.rgba[0])),
         ("G", film.plane(|p| p.rgba[1])),
         ("B", film.plane(|p| p.rgba[2])),
@@ -43,8 +43,21 @@ pub fn write_film(path: &Path, film: &Film) -> Result<()> {
         ("albedo.B", film.plane(|p| p.albedo[2])),
         ("faceid", film.plane(|p| p.face)),
         ("level", film.plane(|p| p.level)),
-    ];
-    crate::io::exr::write_planes(path, film.width as usize, film.height as usize, planes)
+    ]
+}
+
+/// Writes the film's beauty and AOVs (see the module documentation for the channels).
+pub fn write_film(path: &Path, film: &Film) -> Result<()> {
+    let mut out = Output::create(path)?;
+    write_film_to(&mut out, film)?;
+    out.commit()
+}
+
+/// [`write_film`] into an output opened (and so checked) before the render; the caller
+/// commits it.
+pub fn write_film_to(out: &mut Output, film: &Film) -> Result<()> {
+    let (w, h) = (film.width as usize, film.height as usize);
+    crate::io::exr::write_planes_to(out, w, h, film_planes(film))
 }
 
 /// The ACES filmic approximation (Narkowicz 2015), clamped to `[0, 1]`.
@@ -71,13 +84,20 @@ pub fn tone_map(x: f32, exposure: f32) -> u8 {
 
 /// Writes the film's beauty as a tone-mapped sRGB PNG.
 pub fn write_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
+    let mut out = Output::create(path)?;
+    write_preview_to(&mut out, film, exposure)?;
+    out.commit()
+}
+
+/// [`write_preview`] into an output opened before the render; the caller commits it.
+pub fn write_preview_to(out: &mut Output, film: &Film, exposure: f32) -> Result<()> {
     let mut buf = Vec::with_capacity(film.pixels.len() * 3);
     for p in &film.pixels {
         for c in 0..3 {
             buf.push(tone_map(p.rgba[c], exposure));
         }
     }
-    crate::io::png::write_rgb8(path, film.width, film.height, buf)
+    crate::io::png::write_rgb8_to(out, film.width, film.height, buf)
 }
 
 /// Colours of patch levels 0, 1, 2, … in [`write_levels_preview`] (the last repeats).
@@ -96,6 +116,13 @@ pub const LEVEL_COLOURS: [[f32; 3]; 8] = [
 /// colour from [`LEVEL_COLOURS`], shaded by the tone-mapped beauty so the shapes stay
 /// readable; misses are black.
 pub fn write_levels_preview(path: &Path, film: &Film, exposure: f32) -> Result<()> {
+    let mut out = Output::create(path)?;
+    write_levels_preview_to(&mut out, film, exposure)?;
+    out.commit()
+}
+
+/// [`write_levels_preview`] into an output opened before the render; the caller commits it.
+pub fn write_levels_preview_to(out: &mut Output, film: &Film, exposure: f32) -> Result<()> {
     let mut buf = Vec::with_capacity(film.pixels.len() * 3);
     for p in &film.pixels {
         if p.level < 0.0 {
@@ -109,7 +136,7 @@ pub fn write_levels_preview(path: &Path, film: &Film, exposure: f32) -> Result<(
             buf.push((srgb_encode(ch * shade) * 255.0 + 0.5).clamp(0.0, 255.0) as u8);
         }
     }
-    crate::io::png::write_rgb8(path, film.width, film.height, buf)
+    crate::io::png::write_rgb8_to(out, film.width, film.height, buf)
 }
 
 #[cfg(test)]

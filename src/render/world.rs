@@ -6,11 +6,12 @@ use super::camera::Camera;
 use super::env::{EnvMap, Environment};
 use super::light::{Lights, MeshLight};
 use super::material::Material;
-use super::scene::{Dicing, EnvDesc, RenderSettings, SceneDesc};
+use super::scene::{Dicing, EnvDesc, MeshDesc, RenderSettings, SceneDesc};
 use crate::bvh::{MeshBvh, SceneBvh};
 use crate::dice::{dice, DiceOptions, DiceRate, ScreenRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::obj::read_obj;
+use crate::mesh::ControlMesh;
 use crate::patch::{PatchOptions, PatchTable};
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
@@ -64,6 +65,82 @@ pub struct World {
     pub warnings: Vec<String>,
 }
 
+/// The index of `x` in `list`, appending it when new.
+fn index_of<T: PartialEq>(list: &mut Vec<T>, x: T) -> usize {
+    match list.iter().position(|y| *y == x) {
+        Some(i) => i,
+        None => {
+            list.push(x);
+            list.len() - 1
+        }
+    }
+}
+
+/// What makes two dicings of one patch table the same: the options, compared by their bits
+/// (a screen-space rate includes the eye in object space, so only instances with the same
+/// transform share it).
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct DiceKey([u64; 6]);
+
+impl DiceKey {
+    fn of(o: &DiceOptions) -> DiceKey {
+        let m = o.max_rate as u64;
+        DiceKey(match o.rate {
+            DiceRate::Uniform(r) => [0, r as u64, m, 0, 0, 0],
+            DiceRate::EdgeLength(l) => [1, l.to_bits(), m, 0, 0, 0],
+            DiceRate::Screen(s) => [
+                2 | m << 8,
+                s.eye[0].to_bits(),
+                s.eye[1].to_bits(),
+                s.eye[2].to_bits(),
+                s.pixels_per_radian.to_bits(),
+                s.pixels_per_edge.to_bits(),
+            ],
+        })
+    }
+}
+
+/// Checks that `mesh` placed by the entry's transform stays inside the numeric contract
+/// ([`crate::numeric`]). The limit surface lies in the convex hull of the control points, so
+/// the eight corners of the transformed control box bound it.
+fn check_transformed(mesh: &ControlMesh, m: &MeshDesc, index: usize, scene: &str) -> Result<()> {
+    let [lo, hi] = mesh.bounds();
+    let t = &m.transform;
+    let m3 = t.matrix3;
+    let cols = [m3.x_axis, m3.y_axis, m3.z_axis];
+    let mut worst = 0.0f64;
+    for c in 0..8 {
+        let p = [
+            if c & 1 == 0 { lo[0] } else { hi[0] },
+            if c & 2 == 0 { lo[1] } else { hi[1] },
+            if c & 4 == 0 { lo[2] } else { hi[2] },
+        ];
+        for a in 0..3 {
+            // In f64, so that the check itself cannot overflow.
+            let w = t.translation[a] as f64
+                + cols[0][a] as f64 * p[0]
+                + cols[1][a] as f64 * p[1]
+                + cols[2][a] as f64 * p[2];
+            worst = worst.max(if w.is_nan() { f64::INFINITY } else { w.abs() });
+        }
+    }
+    if worst > crate::numeric::MAX_COORD {
+        return Err(Error::new(
+            ErrorKind::Parse,
+            format!(
+                "{} placed by this entry's transform reaches |coordinate| = {worst:.3e}, out of \
+                 range ({}); scale it down",
+                m.file.display(),
+                crate::numeric::contract()
+            ),
+        )
+        .in_file(scene.to_string())
+        .at_line(m.line)
+        .element(format!("key 'mesh[{index}]'")));
+    }
+    Ok(())
+}
+
 fn largest_scale(m: &Affine3A) -> f64 {
     let c = m.matrix3;
     [c.x_axis, c.y_axis, c.z_axis]
@@ -94,16 +171,32 @@ impl World {
         let mut stats = BuildStats::default();
         let scene_name = desc.path.display().to_string();
 
+        crate::memory::check(
+            &format!("a {} × {} render", settings.width, settings.height),
+            super::film::estimate_bytes(settings.width, settings.height),
+            "lower the resolution (--width/--height, or the scene's render.width/height)",
+        )?;
+
+        // Identical meshes are instances: each file is read once, each (file, max_level)
+        // gets one patch table, and each table diced the same way one diced mesh and BVH.
         let t0 = Instant::now();
-        let controls: Vec<_> = desc
+        let mut files: Vec<&std::path::Path> = Vec::new();
+        let file_of: Vec<usize> = desc
             .meshes
+            .iter()
+            .map(|m| index_of(&mut files, m.file.as_path()))
+            .collect();
+        let controls: Vec<_> = files
             .par_iter()
-            .map(|m| read_obj(&m.file))
+            .map(|f| read_obj(f))
             .collect::<Result<Vec<_>>>()?;
         let mut warnings: Vec<String> = controls
             .iter()
             .flat_map(|m| m.warnings.iter().map(|w| w.to_string()))
             .collect();
+        for (i, m) in desc.meshes.iter().enumerate() {
+            check_transformed(&controls[file_of[i]], m, i, &scene_name)?;
+        }
         let environment = match &desc.environment {
             None => None,
             Some(EnvDesc::Constant(c)) => Some(Environment::Constant(*c)),
@@ -113,14 +206,43 @@ impl World {
                 rotate,
                 line,
             }) => {
-                let (w, h, texels) = crate::io::exr::read_rgb(file)?;
-                let texels = texels.into_iter().map(Vec3::from).collect();
-                let map = EnvMap::new(w, h, texels, *intensity).ok_or_else(|| {
-                    Error::new(ErrorKind::Parse, "environment map is empty")
-                        .in_file(scene_name.clone())
+                let at = |e: Error| {
+                    e.in_file(scene_name.clone())
                         .at_line(*line)
                         .element("key 'environment.map'")
-                })?;
+                };
+                let (w, h, texels) = crate::io::exr::read_rgb(file)?;
+                let texels: Vec<Vec3> = texels.into_iter().map(Vec3::from).collect();
+                let report = super::env::TexelReport::new(&texels, *intensity);
+                if report.non_finite > 0 {
+                    let (x, y) = (report.first_non_finite % w, report.first_non_finite / w);
+                    return Err(at(Error::new(
+                        ErrorKind::Parse,
+                        format!(
+                            "{}: {} of {} texels are NaN or infinite{} (the first at column {x}, \
+                             row {y}); an environment map must be finite",
+                            file.display(),
+                            report.non_finite,
+                            texels.len(),
+                            if *intensity != 1.0 {
+                                " after the intensity is applied"
+                            } else {
+                                ""
+                            },
+                        ),
+                    )));
+                }
+                if report.negative > 0 {
+                    warnings.push(format!(
+                        "{scene_name}:{line}: key 'environment.map': {}: {} of {} texels \
+                         have negative components; they are read as 0",
+                        file.display(),
+                        report.negative,
+                        texels.len()
+                    ));
+                }
+                let map = EnvMap::new(w, h, texels, *intensity)
+                    .ok_or_else(|| at(Error::new(ErrorKind::Parse, "environment map is empty")))?;
                 Some(Environment::Map {
                     map: Box::new(map),
                     rotate: rotate.to_radians(),
@@ -130,15 +252,20 @@ impl World {
         stats.load_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        let tables = desc
+        let mut table_keys: Vec<(usize, usize)> = Vec::new();
+        let table_of: Vec<usize> = desc
             .meshes
+            .iter()
+            .zip(&file_of)
+            .map(|(m, &f)| index_of(&mut table_keys, (f, m.max_level)))
+            .collect();
+        let tables = table_keys
             .par_iter()
-            .zip(controls.par_iter())
-            .map(|(m, mesh)| {
+            .map(|&(f, max_level)| {
                 PatchTable::new(
-                    mesh,
+                    &controls[f],
                     PatchOptions {
-                        max_level: m.max_level,
+                        max_level,
                         ..PatchOptions::default()
                     },
                 )
@@ -147,11 +274,10 @@ impl World {
         stats.patch_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        let diced = desc
+        let options: Vec<DiceOptions> = desc
             .meshes
-            .par_iter()
-            .zip(controls.par_iter().zip(tables.par_iter()))
-            .map(|(m, (mesh, table))| {
+            .iter()
+            .map(|m| {
                 let rate = match m.dicing {
                     Dicing::Rate(r) => DiceRate::Uniform(r),
                     Dicing::PixelsPerEdge(p) => {
@@ -164,15 +290,39 @@ impl World {
                         })
                     }
                 };
-                dice(
-                    table,
-                    mesh,
-                    &DiceOptions {
-                        rate,
-                        max_rate: m.max_rate,
-                    },
-                )
-                .map_err(|e| e.in_file(m.file.display().to_string()))
+                DiceOptions {
+                    rate,
+                    max_rate: m.max_rate,
+                }
+            })
+            .collect();
+        let mut jobs: Vec<(usize, DiceKey)> = Vec::new();
+        let job_of: Vec<usize> = (0..desc.meshes.len())
+            .map(|i| index_of(&mut jobs, (table_of[i], DiceKey::of(&options[i]))))
+            .collect();
+        let first_user: Vec<usize> = (0..jobs.len())
+            .map(|j| job_of.iter().position(|&x| x == j).unwrap_or(0))
+            .collect();
+        let estimates = first_user
+            .par_iter()
+            .map(|&i| {
+                crate::dice::estimate_size(&tables[table_of[i]], &controls[file_of[i]], &options[i])
+            })
+            .collect::<Result<Vec<_>>>()?;
+        crate::memory::check(
+            &format!(
+                "dicing and indexing the scene's {} distinct meshes",
+                jobs.len()
+            ),
+            estimates.iter().map(|e| e.bytes_with_bvh()).sum(),
+            "lower the dicing rates (the meshes' rate, max_rate or pixels_per_edge)",
+        )?;
+        let diced = first_user
+            .par_iter()
+            .map(|&i| {
+                let m = &desc.meshes[i];
+                dice(&tables[table_of[i]], &controls[file_of[i]], &options[i])
+                    .map_err(|e| e.in_file(m.file.display().to_string()))
             })
             .collect::<Result<Vec<_>>>()?;
         drop(tables);
@@ -180,15 +330,17 @@ impl World {
         stats.dice_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        let bvhs: Vec<Arc<MeshBvh>> = diced
+        let job_bvhs: Vec<Arc<MeshBvh>> = diced
             .into_par_iter()
             .map(|d| Arc::new(MeshBvh::build(d)))
             .collect();
+        let bvhs: Vec<Arc<MeshBvh>> = job_of.iter().map(|&j| job_bvhs[j].clone()).collect();
         let mut scene = SceneBvh::new();
         let mut transforms = Vec::new();
         let mut instance_material = Vec::new();
         let mut mesh_lights = Vec::new();
-        for (m, bvh) in desc.meshes.iter().zip(&bvhs) {
+        let mut mesh_id: Vec<Option<u32>> = vec![None; job_bvhs.len()];
+        for ((m, bvh), &job) in desc.meshes.iter().zip(&bvhs).zip(&job_of) {
             if bvh.diced.triangles.is_empty() {
                 warnings.push(format!(
                     "{}:{}: mesh {} has no surface (every face a hole?); skipped",
@@ -199,8 +351,15 @@ impl World {
                 continue;
             }
             stats.triangles += bvh.diced.triangles.len();
-            stats.bytes += bvh.bytes();
-            let id = scene.add_mesh(bvh.clone());
+            let id = match mesh_id[job] {
+                Some(id) => id,
+                None => {
+                    stats.bytes += bvh.bytes();
+                    let id = scene.add_mesh(bvh.clone());
+                    mesh_id[job] = Some(id);
+                    id
+                }
+            };
             let inst = scene.add_instance(id, m.transform);
             transforms.push(m.transform);
             instance_material.push(m.material as u32);

@@ -18,6 +18,13 @@ use raw::RawFile;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
+/// Largest image width and height (scene keys `render.width`/`height`, `render --res`).
+pub const MAX_RESOLUTION: u32 = 16384;
+/// Largest samples per pixel (`render.spp`, `render --spp`).
+pub const MAX_SPP: u32 = 1 << 20;
+/// Largest path depth (`render.max_depth`, `render --max-depth`).
+pub const MAX_DEPTH: u32 = 1024;
+
 /// Render settings (`[render]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -149,7 +156,26 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
     };
     let raw: RawFile = toml::from_str(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
-        src.err(span, e.message().trim().to_string())
+        let message = e.message().trim().to_string();
+        let mut err = src.err(span.clone(), message.clone());
+        // A missing key is reported at its table: name the key itself.
+        if let Some(field) = message
+            .strip_prefix("missing field `")
+            .and_then(|r| r.split('`').next())
+        {
+            // An empty span is the whole document (a top-level key).
+            let table = if span.is_empty() {
+                String::new()
+            } else {
+                src.key_at(span.start)
+            };
+            err.element = Some(if table.is_empty() {
+                format!("key '{field}'")
+            } else {
+                format!("key '{table}.{field}'")
+            });
+        }
+        err
     })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
 
@@ -164,16 +190,16 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             Ok(x as u32)
         };
         if let Some(v) = &r.width {
-            render.width = int(v, 1, 16384)?;
+            render.width = int(v, 1, MAX_RESOLUTION as i64)?;
         }
         if let Some(v) = &r.height {
-            render.height = int(v, 1, 16384)?;
+            render.height = int(v, 1, MAX_RESOLUTION as i64)?;
         }
         if let Some(v) = &r.spp {
-            render.spp = int(v, 1, 1 << 20)?;
+            render.spp = int(v, 1, MAX_SPP as i64)?;
         }
         if let Some(v) = &r.max_depth {
-            render.max_depth = int(v, 0, 1024)?;
+            render.max_depth = int(v, 0, MAX_DEPTH as i64)?;
         }
         if let Some(v) = &r.seed {
             render.seed = int(v, 0, u32::MAX as i64)?;
@@ -195,6 +221,12 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
         let x = Vec3::from(*v.get_ref());
         if !finite3(x) {
             return Err(src.err(v.span(), "components must be finite"));
+        }
+        if !crate::numeric::in_range(x.as_dvec3().into()) {
+            return Err(src.err(
+                v.span(),
+                format!("out of range ({})", crate::numeric::contract()),
+            ));
         }
         Ok(x)
     };
@@ -278,8 +310,9 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
         let max_level = match &r.max_level {
             Some(v) => {
                 let x = *v.get_ref();
-                if !(0..=16).contains(&x) {
-                    return Err(src.err(v.span(), "max_level must be in 0..=16"));
+                let max = crate::patch::table::MAX_LEVEL as i64;
+                if !(1..=max).contains(&x) {
+                    return Err(src.err(v.span(), format!("max_level must be in 1..={max}")));
                 }
                 x as usize
             }
@@ -478,7 +511,30 @@ radiance = 0.2
         let e = err("[camera\n");
         assert!(e.starts_with("s.toml:1:"), "{e}");
         let e = err("[render]\nwidth = 3\n");
-        assert!(e.contains("missing field `camera`"), "{e}");
+        assert!(e.contains("key 'camera': missing field `camera`"), "{e}");
+        let e = err(&GOOD.replace("fov = 40\n", ""));
+        assert!(e.contains("key 'camera.fov': missing field `fov`"), "{e}");
+        // Values of colour keys are described, not named by an internal type.
+        let e = err(&GOOD.replace("albedo = 0.5", "albedo = \"grey\""));
+        assert_eq!(
+            e,
+            "s.toml:14: key 'materials.clay.albedo': invalid type: string \"grey\", expected a \
+             number or an array of 3 numbers"
+        );
+        let e = err(&GOOD.replace("radiance = [5, 5, 5]", "radiance = [5, 5]"));
+        assert!(
+            e.starts_with(
+                "s.toml:38: key 'light[0].radiance': invalid length 2, expected a number"
+            ),
+            "{e}"
+        );
+        assert!(!e.contains("RawRgb") && !e.contains("untagged"), "{e}");
+        // The numeric contract applies to the camera and lights too.
+        let e = err(&GOOD.replace("position = [0, 1, 5]", "position = [0, 1, 1e20]"));
+        assert!(
+            e.starts_with("s.toml:8: key 'camera.position': out of range (the supported range"),
+            "{e}"
+        );
     }
 
     #[test]

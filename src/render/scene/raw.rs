@@ -5,11 +5,49 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
 
-#[derive(Deserialize)]
-#[serde(untagged)]
+/// A colour or scale: one number (grey) or three. Deserialised by hand so that a wrong value
+/// is reported as what the key expects, not as an internal type.
 pub(super) enum RawRgb {
     Grey(f32),
     Rgb([f32; 3]),
+}
+
+impl<'de> Deserialize<'de> for RawRgb {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = RawRgb;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an array of 3 numbers")
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<RawRgb, E> {
+                Ok(RawRgb::Grey(x as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<RawRgb, E> {
+                Ok(RawRgb::Grey(x as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<RawRgb, E> {
+                Ok(RawRgb::Grey(x as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<RawRgb, A::Error> {
+                let mut c = [0.0f32; 3];
+                for (i, x) in c.iter_mut().enumerate() {
+                    *x = seq
+                        .next_element::<f64>()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?
+                        as f32;
+                }
+                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(RawRgb::Rgb(c))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 impl RawRgb {
