@@ -272,7 +272,7 @@ impl Surface {
                 match h {
                     None => out.miss(),
                     Some(h) => match exact.then(|| refine_hit(&self.table, ray, h)).flatten() {
-                        Some(x) => out.push(x.t, x.face, x.k, x.u, x.v, x.n),
+                        Some(x) => out.push(x.t, x.face, x.k, x.u, x.v, x.n, true),
                         None => out.push(
                             h.t as f64,
                             h.face,
@@ -280,6 +280,7 @@ impl Surface {
                             h.u as f64,
                             h.v as f64,
                             h.ns.map(|c| c as f64),
+                            false,
                         ),
                     },
                 }
@@ -294,6 +295,9 @@ impl Surface {
         dict.set_item("u", res.u.into_pyarray(py))?;
         dict.set_item("v", res.v.into_pyarray(py))?;
         dict.set_item("n", matrix(py, n, 3, res.n))?;
+        if exact {
+            dict.set_item("refined", res.refined.into_pyarray(py))?;
+        }
         Ok(dict)
     }
 
@@ -392,6 +396,9 @@ struct TraceOut {
     u: Vec<f64>,
     v: Vec<f64>,
     n: Vec<f64>,
+    /// With `exact`: the hit was refined onto the exact limit surface (false for misses and
+    /// for hits that keep the diced answer), as the CLI's tenth `trace --exact` field.
+    refined: Vec<bool>,
 }
 
 impl TraceOut {
@@ -404,6 +411,7 @@ impl TraceOut {
             u: Vec::with_capacity(n),
             v: Vec::with_capacity(n),
             n: Vec::with_capacity(3 * n),
+            refined: Vec::with_capacity(n),
         }
     }
 
@@ -415,10 +423,12 @@ impl TraceOut {
         self.u.push(f64::NAN);
         self.v.push(f64::NAN);
         self.n.extend_from_slice(&[f64::NAN; 3]);
+        self.refined.push(false);
     }
 
-    fn push(&mut self, t: f64, face: u32, k: u32, u: f64, v: f64, n: [f64; 3]) {
+    fn push(&mut self, t: f64, face: u32, k: u32, u: f64, v: f64, n: [f64; 3], refined: bool) {
         self.hit.push(true);
+        self.refined.push(refined);
         self.t.push(t);
         self.face.push(face as i64);
         self.k.push(k as i64);

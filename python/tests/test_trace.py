@@ -29,7 +29,7 @@ def test_every_ray_from_inside_a_closed_mesh_hits(meshes, name, inside, exact):
     d = unit_directions(n, seed=7)
     o = np.tile(np.array(inside, dtype=np.float32), (n, 1))
     h = s.trace(o, d, rate=8, exact=exact)
-    assert set(h) == {"hit", "t", "face", "k", "u", "v", "n"}
+    assert set(h) == {"hit", "t", "face", "k", "u", "v", "n"} | ({"refined"} if exact else set())
     assert h["hit"].dtype == np.bool_ and h["hit"].shape == (n,)
     assert h["n"].shape == (n, 3)
     # Watertight dicing and a watertight triangle test: not one ray escapes.
@@ -92,6 +92,8 @@ def test_trace_is_the_cli(cli, meshes, exact):
         vals = np.array([float(tok[1]), float(tok[4]), float(tok[5]), *map(float, tok[6:9])])
         got = np.array([h["t"][i], h["u"][i], h["v"][i], *h["n"][i]])
         if exact:
+            # The CLI's tenth field says whether Newton refined the hit, as "refined" does.
+            assert tok[9] == ("1" if h["refined"][i] else "0"), line
             # f64 printed as round-trip text: the same bits (or the diced fallback, which
             # prints f32 values as f32 text; those round to the same f32 below).
             same = np.array_equal(vals, got) or np.array_equal(

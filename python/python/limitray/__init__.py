@@ -106,7 +106,9 @@ class Surface:
         that cannot be refined keeps the diced hit. Returns ``{"hit": bool (N,), "t", "face",
         "k", "u", "v": (N,), "n": (N, 3)}``: float64 values (diced hits are float32 values,
         widened exactly), face and k int64; a miss has t = inf, face = k = -1, u, v, n = nan.
-        The BVH of each rate is built once and kept.
+        With ``exact`` the dict also has ``"refined"``: bool (N,), true where Newton refined
+        the hit (the CLI's tenth ``trace --exact`` field). The BVH of each rate is built once
+        and kept.
         """
         o = _floats("origins", origins, np.float32, shape=3)
         d = _floats("directions", directions, np.float32, shape=3)
