@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install OpenSubdiv (Debian's libosd-dev) and g++, then build the reference
-# benchmark benches/osd/osd_refine_bench.cpp into target/osd/osd_refine_bench.
+# benchmark benches/osd/osd_refine_bench.cpp into target/osd/osd_refine_bench and the
+# differential-test oracle benches/osd/osd_oracle.cpp into target/osd/osd_oracle.
 #
 # Idempotent: packages already installed are not touched (apt-get update runs
 # only when something is missing) and the binary is rebuilt only when the
@@ -10,10 +11,10 @@
 #   bash scripts/setup-osd.sh
 #   target/osd/osd_refine_bench MESH.obj LEVEL [--chaikin] [--reps N] [--dump OUT.obj]
 #   target/osd/osd_refine_bench --grid N LEVEL ...
+#   target/osd/osd_oracle MESH.obj [--refine N] [--eval] < samples
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-SRC="$ROOT/benches/osd/osd_refine_bench.cpp"
 OUTDIR="$ROOT/target/osd"
 BIN="$OUTDIR/osd_refine_bench"
 
@@ -52,11 +53,17 @@ if ! ldconfig -p | grep -q 'libosdCPU\.so '; then
 fi
 
 mkdir -p "$OUTDIR"
-if [[ "${FORCE:-0}" == 1 || ! -x "$BIN" || "$SRC" -nt "$BIN" || "${BASH_SOURCE[0]}" -nt "$BIN" ]]; then
-    echo "setup-osd: building $BIN" >&2
-    g++ -std=c++17 -O2 -DNDEBUG -Wall -Wextra -o "$BIN.tmp" "$SRC" -losdCPU
-    mv -f "$BIN.tmp" "$BIN"
-else
-    echo "setup-osd: $BIN is up to date" >&2
-fi
+build() {
+    local src="$ROOT/benches/osd/$1.cpp" bin="$OUTDIR/$1"
+    if [[ "${FORCE:-0}" == 1 || ! -x "$bin" || "$src" -nt "$bin" || "${BASH_SOURCE[0]}" -nt "$bin" ]]; then
+        echo "setup-osd: building $bin" >&2
+        g++ -std=c++17 -O2 -DNDEBUG -Wall -Wextra -o "$bin.tmp" "$src" -losdCPU
+        mv -f "$bin.tmp" "$bin"
+    else
+        echo "setup-osd: $bin is up to date" >&2
+    fi
+}
+build osd_oracle
+build osd_refine_bench
+# Last line: the benchmark binary (scripts/bench-refine.sh reads it).
 echo "$BIN"

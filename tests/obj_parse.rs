@@ -288,20 +288,37 @@ fn unsupported_and_unknown_tags_warn() {
     let text = format!(
         "{CUBE}t facevaryinginterpolateboundary 1/0/0 1\n\
          t facevaryingpropagatecorners 1/0/0 1\n\
-         t smoothtriangles 0/0/1 catmark\n\
          t frobnicate 1/1/1 3 0.5 word\n"
     );
     let m = ok(&text);
-    assert_eq!(m.warnings.len(), 4, "{:?}", m.warnings);
-    for w in &m.warnings[..3] {
+    assert_eq!(m.warnings.len(), 3, "{:?}", m.warnings);
+    for w in &m.warnings[..2] {
         assert!(w.contains("not supported, ignored"), "{w}");
     }
-    assert!(m.warnings[3].contains("frobnicate"), "{}", m.warnings[3]);
+    assert!(m.warnings[2].contains("frobnicate"), "{}", m.warnings[2]);
     assert!(
-        m.warnings[3].starts_with("test.obj:18:"),
+        m.warnings[2].starts_with("test.obj:17:"),
         "{}",
-        m.warnings[3]
+        m.warnings[2]
     );
+}
+
+#[test]
+fn smoothtriangles_tag() {
+    assert!(!ok(CUBE).options.smooth_triangles);
+    let m = ok(&format!("{CUBE}t smoothtriangles 0/0/1 smooth\n"));
+    assert!(m.options.smooth_triangles && m.warnings.is_empty());
+    let m = ok(&format!(
+        "{CUBE}t smoothtriangles 0/0/1 smooth\nt smoothtriangles 0/0/1 catmark\n"
+    ));
+    assert!(!m.options.smooth_triangles);
+    let e = limitray::mesh::obj::parse_obj(
+        &format!("{CUBE}t smoothtriangles 0/0/1 loop\n"),
+        Some("test.obj"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("test.obj:15") && e.contains("'loop'"), "{e}");
 }
 
 #[test]

@@ -41,6 +41,7 @@
 //   t interpolateboundary 1/0/0 m                0 none, 1 edge-and-corner, 2 edge-only
 //                                                 (edge-and-corner when absent)
 //   t creasemethod 0/0/1 chaikin|uniform|normal
+//   t smoothtriangles 0/0/1 smooth|catmark       Sdc TRI_SUB_SMOOTH or TRI_SUB_CATMARK
 // Other tags (vertexedit, facevaryinginterpolateboundary, ...) are ignored with a warning.
 
 #include <opensubdiv/far/error.h>
@@ -100,6 +101,7 @@ struct Mesh {
     std::vector<int> holes;
     Sdc::Options::VtxBoundaryInterpolation boundary = Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER;
     Sdc::Options::CreasingMethod creaseMethod = Sdc::Options::CREASE_UNIFORM;
+    Sdc::Options::TriangleSubdivision triangles = Sdc::Options::TRI_SUB_CATMARK;
 };
 
 [[noreturn]] void fail(std::string const &msg) {
@@ -210,6 +212,15 @@ void parseTag(Mesh &mesh, std::vector<std::string> const &tok, std::string const
             mesh.creaseMethod = Sdc::Options::CREASE_UNIFORM;
         } else {
             throw std::runtime_error("unknown creasemethod '" + strings[0] + "'");
+        }
+    } else if (name == "smoothtriangles") {
+        if (nstring != 1) throw std::runtime_error("smoothtriangles needs one string");
+        if (strings[0] == "smooth") {
+            mesh.triangles = Sdc::Options::TRI_SUB_SMOOTH;
+        } else if (strings[0] == "catmark") {
+            mesh.triangles = Sdc::Options::TRI_SUB_CATMARK;
+        } else {
+            throw std::runtime_error("unknown smoothtriangles '" + strings[0] + "'");
         }
     } else {
         std::fprintf(stderr, "osd_refine_bench: %s\n",
@@ -327,7 +338,7 @@ Far::TopologyRefiner *createRefiner(Mesh const &mesh) {
     Sdc::Options sdc;
     sdc.SetVtxBoundaryInterpolation(mesh.boundary);
     sdc.SetCreasingMethod(mesh.creaseMethod);
-    sdc.SetTriangleSubdivision(Sdc::Options::TRI_SUB_CATMARK);
+    sdc.SetTriangleSubdivision(mesh.triangles);
 
     using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
     Far::TopologyRefiner *refiner = Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, sdc));

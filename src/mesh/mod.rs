@@ -44,6 +44,11 @@ pub struct Options {
     pub boundary: BoundaryInterpolation,
     /// Crease sharpness rule; uniform unless a tag or the caller says otherwise.
     pub crease_method: CreaseMethod,
+    /// OpenSubdiv's `TRI_SUB_SMOOTH` (tag `t smoothtriangles 0/0/1 smooth`): edge points of
+    /// edges next to triangles of the control mesh give the triangles' face points more
+    /// weight (0.47 instead of 0.25), which rounds triangles out like Loop's scheme would.
+    /// Off by default (`TRI_SUB_CATMARK`, the plain Catmull-Clark rule).
+    pub smooth_triangles: bool,
 }
 
 /// A semi-sharp (or infinitely sharp) edge between two control vertices.

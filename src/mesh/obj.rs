@@ -12,9 +12,10 @@
 //! * `t NAME nint/nfloat[/nstring] ints… floats… strings…`: OpenSubdiv's tags, with 0-based
 //!   vertex and face indices: `crease` (the ints are pairs of vertices; one sharpness for all
 //!   pairs or one per pair), `corner`, `hole`, `interpolateboundary` (0 none, 1 edge and
-//!   corner, 2 edge only) and `creasemethod` (`chaikin`, `normal` or `uniform`). The
-//!   hierarchical edits `vertexedit`, `edgeedit` and `faceedit`, the face-varying tags and
-//!   `smoothtriangles` are recognised and ignored with a warning.
+//!   corner, 2 edge only), `creasemethod` (`chaikin`, `normal` or `uniform`) and
+//!   `smoothtriangles` (`smooth` or `catmark`, see [`crate::mesh::Options::smooth_triangles`]).
+//!   The hierarchical edits `vertexedit`, `edgeedit` and `faceedit` and the face-varying tags
+//!   are recognised and ignored with a warning.
 //! * `ec s a b`: Embree's edge-crease extension: sharpness `s` on the edge between vertices `a`
 //!   and `b`, which are 1-based like `f` indices (negative ones relative to the vertices read
 //!   so far).
@@ -715,9 +716,32 @@ impl Parser {
                 self.warn_ignored(line, el, msg);
                 Ok(())
             }
-            "facevaryinginterpolateboundary"
-            | "facevaryingpropagatecorners"
-            | "smoothtriangles" => {
+            "smoothtriangles" => {
+                self.unused(line, el, &[ints, floats]);
+                let [s] = strings else {
+                    return Err(self.err(
+                        line,
+                        el,
+                        format!("expected 1 string, found {}", strings.len()),
+                    ));
+                };
+                self.mesh.options.smooth_triangles = match unquote(s) {
+                    "smooth" => true,
+                    "catmark" => false,
+                    other => {
+                        return Err(self.err(
+                            line,
+                            el,
+                            format!(
+                                "unknown triangle rule {} (expected smooth or catmark)",
+                                quote(other)
+                            ),
+                        ))
+                    }
+                };
+                Ok(())
+            }
+            "facevaryinginterpolateboundary" | "facevaryingpropagatecorners" => {
                 let msg = format!("{el}: not supported, ignored");
                 self.warn_ignored(line, el, msg);
                 Ok(())

@@ -142,6 +142,7 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
             edge_sharpness,
             vertex_sharpness,
             face_hole,
+            smooth_triangles: level.smooth_triangles,
         },
         verts_old,
         seed_new,

@@ -126,6 +126,7 @@ pub fn classify(
         let lead = fe[k];
         let trail = fe[(k + 3) % 4];
         let mut sharp = 0;
+        let mut infinite = 0;
         for &e in edges {
             let s = es(e);
             if crease::is_semi_sharp(s) {
@@ -146,6 +147,9 @@ pub fn classify(
             if crease::is_sharp(s) {
                 sharp += 1;
             }
+            if crease::is_infinite(s) {
+                infinite += 1;
+            }
         }
         if crease::is_semi_sharp(vs) {
             return None;
@@ -164,6 +168,14 @@ pub fn classify(
                 let crease_through =
                     crease_edge.is_some_and(|(ck, _)| ck == k || (ck + 1) % 4 == k);
                 if sharp != if crease_through { 2 } else { 0 } {
+                    return None;
+                }
+                // The single crease must continue as itself: an infinitely sharp edge meeting
+                // it here (a crease ending at, or turning into, an infinitely sharp one) makes
+                // the vertex a crease vertex whose sharpness does not decay like the patch's.
+                // Found by the differential test (tests/osd_oracle.rs,
+                // `infinitely_sharp_crease_meets_semi_sharp`).
+                if crease_through && infinite > 0 {
                     return None;
                 }
             }

@@ -183,6 +183,12 @@ pub struct Sample {
     pub du: [f64; 3],
     /// `∂P/∂v`.
     pub dv: [f64; 3],
+    /// `∂²P/∂u²`.
+    pub duu: [f64; 3],
+    /// `∂²P/∂u∂v`.
+    pub duv: [f64; 3],
+    /// `∂²P/∂v²`.
+    pub dvv: [f64; 3],
     /// Level of the patch that was evaluated.
     pub level: u8,
 }
@@ -222,12 +228,29 @@ impl Frame {
             b: [va[0] * 0.5, va[1] * 0.5],
         }
     }
-    /// Derivatives with respect to the (sub-)face's (u, v) from those in (s, t).
-    fn face_derivatives(&self, ds: [f64; 3], dt: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-        let h2 = self.a[0] * self.a[0] + self.a[1] * self.a[1];
-        let du = std::array::from_fn(|i| (ds[i] * self.a[0] + dt[i] * self.b[0]) / h2);
-        let dv = std::array::from_fn(|i| (ds[i] * self.a[1] + dt[i] * self.b[1]) / h2);
-        (du, dv)
+    /// First and second derivatives with respect to the (sub-)face's (u, v) from those in
+    /// the frame's (s, t). The frame is a rotation and scaling by `h`, so
+    /// `s = a·(x − o) / h²` and `t = b·(x − o) / h²`.
+    fn face_point(&self, pt: PatchPoint) -> PatchPoint {
+        let (a, b) = (self.a, self.b);
+        let h2 = a[0] * a[0] + a[1] * a[1];
+        let h4 = h2 * h2;
+        let d2 = |x: usize, y: usize| -> [f64; 3] {
+            std::array::from_fn(|i| {
+                (a[x] * a[y] * pt.duu[i]
+                    + (a[x] * b[y] + a[y] * b[x]) * pt.duv[i]
+                    + b[x] * b[y] * pt.dvv[i])
+                    / h4
+            })
+        };
+        PatchPoint {
+            p: pt.p,
+            du: std::array::from_fn(|i| (pt.du[i] * a[0] + pt.dv[i] * b[0]) / h2),
+            dv: std::array::from_fn(|i| (pt.du[i] * a[1] + pt.dv[i] * b[1]) / h2),
+            duu: d2(0, 0),
+            duv: d2(0, 1),
+            dvv: d2(1, 1),
+        }
     }
 }
 
@@ -588,11 +611,14 @@ impl PatchTable {
                 Node::Leaf(p) => {
                     let patch = &self.patches[p as usize];
                     let (pt, extra) = self.eval_patch(patch, s, t);
-                    let (du, dv) = frame.face_derivatives(pt.du, pt.dv);
+                    let pt = frame.face_point(pt);
                     return Ok(Sample {
                         p: pt.p,
-                        du,
-                        dv,
+                        du: pt.du,
+                        dv: pt.dv,
+                        duu: pt.duu,
+                        duv: pt.duv,
+                        dvv: pt.dvv,
                         level: patch.level + extra,
                     });
                 }
@@ -715,9 +741,7 @@ impl PatchTable {
                 ..Default::default()
             }
         });
-        let (du, dv) = frame.face_derivatives(pt.du, pt.dv);
-        pt.du = du;
-        pt.dv = dv;
+        pt = frame.face_point(pt);
         if let Some(p) = corner_p {
             pt.p = p;
         }

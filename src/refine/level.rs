@@ -20,6 +20,9 @@ pub struct Level {
     /// Faces that are not part of the surface (hole tags; boundary faces when boundary
     /// interpolation is `None`).
     pub face_hole: Vec<bool>,
+    /// The smooth-triangle edge rule applies ([`crate::mesh::Options::smooth_triangles`]);
+    /// it only changes anything where triangles are, i.e. at level 0.
+    pub smooth_triangles: bool,
 }
 
 impl Level {
@@ -119,6 +122,7 @@ impl Level {
                 edge_sharpness,
                 vertex_sharpness,
                 face_hole,
+                smooth_triangles: options.smooth_triangles,
             },
             warnings,
         ))

@@ -139,6 +139,8 @@ struct Ring {
     /// Sharpness of the other edges at the far end of each ring edge.
     far_sharpness: Vec<Vec<f32>>,
     vertex_sharpness: f32,
+    /// The level's smooth-triangle rule (see [`Level::smooth_triangles`]).
+    smooth_triangles: bool,
 }
 
 impl Ring {
@@ -207,6 +209,7 @@ impl Ring {
                 &ef,
                 self.edge_sharpness[i],
                 child_sharp,
+                self.smooth_triangles,
             );
             rows.push(acc.terms().to_vec());
         }
@@ -242,6 +245,7 @@ impl Ring {
             edge_sharpness: child_es,
             far_sharpness: far_child.iter().map(|&s| vec![s]).collect(),
             vertex_sharpness: child_vs,
+            smooth_triangles: self.smooth_triangles,
         };
         (ring, rows)
     }
@@ -332,6 +336,7 @@ fn vertex_limit_masks(level: &Level, v: usize, method: CreaseMethod) -> [Vec<(u3
         edge_sharpness: inc,
         far_sharpness,
         vertex_sharpness: level.vertex_sharpness[v],
+        smooth_triangles: level.smooth_triangles,
     };
     // At least one step makes the ring canonical: face i = (centre, edge end i, face point i,
     // edge end i+1), all quads.

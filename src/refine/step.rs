@@ -210,6 +210,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             &faces,
             parent.edge_sharpness[e],
             crease::is_sharp(h0) && crease::is_sharp(h1),
+            parent.smooth_triangles,
         );
     });
     let mut table = vertex_rows;
@@ -222,6 +223,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             edge_sharpness,
             vertex_sharpness,
             face_hole,
+            smooth_triangles: parent.smooth_triangles,
         },
         table,
     )

@@ -1,0 +1,431 @@
+// osd_oracle: OpenSubdiv 3.5 Far as a reference for limitray's differential tests
+// (tests/osd_oracle.rs, scripts/soak-osd.sh). Everything in double precision (Far 3.5's
+// PrimvarRefinerReal<double>, StencilTableReal<double>, EvaluateBasis<double>).
+//
+// Build: scripts/setup-osd.sh  (writes target/osd/osd_oracle)
+//
+// Usage:
+//   osd_oracle MESH.obj [--refine N] [--eval] [--endcap gregory|bspline|legacy] [--isolation L]
+//
+// --refine N   uniform refinement (TopologyRefiner::RefineUniform, PrimvarRefinerReal<double>)
+//              to levels 1..N; for each level prints
+//                level L NV NF
+//                NV lines "x y z"                  vertex positions, Far's vertex order
+//                NF lines "h n i0 .. i(n-1)"       hole flag (0/1), size, 0-based vertex indices
+// --eval       reads samples "face k u v" from stdin (k: sub-face of an n-gon, 0 for quads) and
+//              builds Far's adaptive PatchTable (RefineAdaptive to the isolation level, default
+//              10, infinitely sharp patches on, single-crease patches off, end caps of the
+//              given type, default Gregory basis). Prints "eval COUNT", then one line per sample:
+//                "none"                                                 (hole, no patch)
+//                "ok TYPE DEPTH px py pz dux duy duz dvx dvy dvz duux duuy duuz duvx duvy duvz
+//                 dvvx dvvy dvvz"
+//              with TYPE Far's PatchDescriptor type (REGULAR, GREGORY_BASIS, ...) and DEPTH the
+//              patch's refinement level. Derivatives are with respect to the ptex (sub-)face's
+//              (u, v): ptex face = PtexIndices::GetFaceId(face) + k (OpenSubdiv's convention,
+//              also limitray's); on sub-faces of non-quads Far's own derivatives are rescaled
+//              (see evaluate()).
+//
+// OBJ input: `v x y z`, `f` (a, a/b, a/b/c, a//c; 1-based or negative), and OpenSubdiv's tags
+//   t crease N/M/0 v0 v1 [v0 v1 ...] s [s ...]   0-based pairs; one sharpness or one per pair
+//   t corner N/M/0 v [v ...] s [s ...]
+//   t hole N/0/0 f [f ...]                       0-based faces
+//   t interpolateboundary 1/0/0 m                0 none, 1 edge-and-corner, 2 edge-only
+//                                                 (edge-and-corner when absent)
+//   t creasemethod 0/0/1 chaikin|uniform|normal
+//   t smoothtriangles 0/0/1 smooth|catmark       Sdc TRI_SUB_SMOOTH or TRI_SUB_CATMARK
+// Other tags are ignored with a warning on stderr. Errors: message on stderr, exit 1.
+
+#include <opensubdiv/far/error.h>
+#include <opensubdiv/far/patchMap.h>
+#include <opensubdiv/far/patchTable.h>
+#include <opensubdiv/far/patchTableFactory.h>
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/ptexIndices.h>
+#include <opensubdiv/far/stencilTable.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyLevel.h>
+#include <opensubdiv/far/topologyRefiner.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+#include <opensubdiv/sdc/options.h>
+#include <opensubdiv/sdc/types.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+using namespace OpenSubdiv;
+
+namespace {
+
+struct Point3 {
+    double x, y, z;
+    void Clear(void * = nullptr) { x = y = z = 0.0; }
+    void AddWithWeight(Point3 const &src, double w) {
+        x += w * src.x;
+        y += w * src.y;
+        z += w * src.z;
+    }
+};
+
+struct Mesh {
+    std::vector<Point3> positions;
+    std::vector<int> faceSizes, faceVerts;
+    std::vector<int> creasePairs;
+    std::vector<float> creaseSharpness;
+    std::vector<int> cornerVerts;
+    std::vector<float> cornerSharpness;
+    std::vector<int> holes;
+    Sdc::Options::VtxBoundaryInterpolation boundary = Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER;
+    Sdc::Options::CreasingMethod creaseMethod = Sdc::Options::CREASE_UNIFORM;
+    Sdc::Options::TriangleSubdivision triangles = Sdc::Options::TRI_SUB_CATMARK;
+};
+
+[[noreturn]] void fail(std::string const &msg) {
+    std::fprintf(stderr, "osd_oracle: %s\n", msg.c_str());
+    std::exit(1);
+}
+
+long parseInt(std::string const &s, char const *what) {
+    char *end = nullptr;
+    errno = 0;
+    long v = std::strtol(s.c_str(), &end, 10);
+    if (s.empty() || *end != '\0' || errno != 0) throw std::runtime_error(std::string("bad ") + what + " '" + s + "'");
+    return v;
+}
+
+double parseReal(std::string const &s, char const *what) {
+    char *end = nullptr;
+    errno = 0;
+    double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || *end != '\0' || errno == ERANGE) throw std::runtime_error(std::string("bad ") + what + " '" + s + "'");
+    return v;
+}
+
+void parseTag(Mesh &m, std::vector<std::string> const &tok) {
+    if (tok.size() < 3) throw std::runtime_error("tag without argument counts");
+    std::string const &name = tok[1];
+    std::vector<long> counts;
+    {
+        std::stringstream ss(tok[2]);
+        for (std::string c; std::getline(ss, c, '/');) counts.push_back(parseInt(c, "tag count"));
+    }
+    if (counts.size() < 2 || counts.size() > 3) throw std::runtime_error("bad tag counts '" + tok[2] + "'");
+    long ni = counts[0], nf = counts[1], ns = counts.size() == 3 ? counts[2] : 0;
+    if (ni < 0 || nf < 0 || ns < 0 || long(tok.size()) != 3 + ni + nf + ns)
+        throw std::runtime_error("tag '" + name + "' argument count mismatch");
+    std::vector<long> ints;
+    std::vector<float> floats;
+    std::vector<std::string> strs;
+    for (long k = 0; k < ni; ++k) ints.push_back(parseInt(tok[3 + k], "tag int"));
+    for (long k = 0; k < nf; ++k) floats.push_back(float(parseReal(tok[3 + ni + k], "tag float")));
+    for (long k = 0; k < ns; ++k) strs.push_back(tok[3 + ni + nf + k]);
+    if (name == "crease") {
+        if (ni < 2 || ni % 2 || (nf != 1 && nf != ni / 2)) throw std::runtime_error("bad crease tag");
+        for (long p = 0; p < ni / 2; ++p) {
+            m.creasePairs.push_back(int(ints[2 * p]));
+            m.creasePairs.push_back(int(ints[2 * p + 1]));
+            m.creaseSharpness.push_back(nf == 1 ? floats[0] : floats[p]);
+        }
+    } else if (name == "corner") {
+        if (ni < 1 || (nf != 1 && nf != ni)) throw std::runtime_error("bad corner tag");
+        for (long k = 0; k < ni; ++k) {
+            m.cornerVerts.push_back(int(ints[k]));
+            m.cornerSharpness.push_back(nf == 1 ? floats[0] : floats[k]);
+        }
+    } else if (name == "hole") {
+        for (long f : ints) m.holes.push_back(int(f));
+    } else if (name == "interpolateboundary") {
+        if (ni != 1 || ints[0] < 0 || ints[0] > 2) throw std::runtime_error("bad interpolateboundary");
+        m.boundary = ints[0] == 0   ? Sdc::Options::VTX_BOUNDARY_NONE
+                     : ints[0] == 1 ? Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER
+                                    : Sdc::Options::VTX_BOUNDARY_EDGE_ONLY;
+    } else if (name == "creasemethod") {
+        if (ns != 1) throw std::runtime_error("bad creasemethod");
+        if (strs[0] == "chaikin") m.creaseMethod = Sdc::Options::CREASE_CHAIKIN;
+        else if (strs[0] == "uniform" || strs[0] == "normal") m.creaseMethod = Sdc::Options::CREASE_UNIFORM;
+        else throw std::runtime_error("unknown creasemethod '" + strs[0] + "'");
+    } else if (name == "smoothtriangles") {
+        if (ns != 1) throw std::runtime_error("bad smoothtriangles");
+        if (strs[0] == "smooth") m.triangles = Sdc::Options::TRI_SUB_SMOOTH;
+        else if (strs[0] == "catmark") m.triangles = Sdc::Options::TRI_SUB_CATMARK;
+        else throw std::runtime_error("unknown smoothtriangles '" + strs[0] + "'");
+    } else {
+        std::fprintf(stderr, "osd_oracle: ignoring tag '%s'\n", name.c_str());
+    }
+}
+
+Mesh readObj(std::string const &path) {
+    std::ifstream in(path);
+    if (!in) fail("cannot open " + path);
+    Mesh m;
+    std::string text;
+    int lineNo = 0;
+    while (std::getline(in, text)) {
+        ++lineNo;
+        size_t hash = text.find('#');
+        if (hash != std::string::npos) text.erase(hash);
+        std::istringstream ls(text);
+        std::vector<std::string> tok;
+        for (std::string t; ls >> t;) tok.push_back(t);
+        if (tok.empty()) continue;
+        try {
+            if (tok[0] == "v") {
+                if (tok.size() < 4) throw std::runtime_error("vertex needs 3 coordinates");
+                m.positions.push_back({parseReal(tok[1], "coordinate"), parseReal(tok[2], "coordinate"),
+                                       parseReal(tok[3], "coordinate")});
+            } else if (tok[0] == "f") {
+                if (tok.size() < 4) throw std::runtime_error("face needs at least 3 vertices");
+                long nv = long(m.positions.size());
+                for (size_t k = 1; k < tok.size(); ++k) {
+                    long i = parseInt(tok[k].substr(0, tok[k].find('/')), "face index");
+                    long v = i > 0 ? i - 1 : nv + i;
+                    if (i == 0 || v < 0 || v >= nv) throw std::runtime_error("face index out of range");
+                    m.faceVerts.push_back(int(v));
+                }
+                m.faceSizes.push_back(int(tok.size() - 1));
+            } else if (tok[0] == "t") {
+                parseTag(m, tok);
+            }
+        } catch (std::exception const &e) {
+            fail(path + ":" + std::to_string(lineNo) + ": " + e.what());
+        }
+    }
+    if (m.faceSizes.empty()) fail(path + ": no faces");
+    return m;
+}
+
+bool gFarError = false;
+void onFarError(Far::ErrorType, const char *msg) {
+    std::fprintf(stderr, "osd_oracle: OpenSubdiv error: %s\n", msg);
+    gFarError = true;
+}
+void onFarWarning(const char *msg) { std::fprintf(stderr, "osd_oracle: OpenSubdiv warning: %s\n", msg); }
+
+Far::TopologyRefiner *createRefiner(Mesh const &m) {
+    Far::TopologyDescriptor desc;
+    desc.numVertices = int(m.positions.size());
+    desc.numFaces = int(m.faceSizes.size());
+    desc.numVertsPerFace = m.faceSizes.data();
+    desc.vertIndicesPerFace = m.faceVerts.data();
+    desc.numCreases = int(m.creaseSharpness.size());
+    desc.creaseVertexIndexPairs = m.creasePairs.data();
+    desc.creaseWeights = m.creaseSharpness.data();
+    desc.numCorners = int(m.cornerVerts.size());
+    desc.cornerVertexIndices = m.cornerVerts.data();
+    desc.cornerWeights = m.cornerSharpness.data();
+    desc.numHoles = int(m.holes.size());
+    desc.holeIndices = m.holes.data();
+    Sdc::Options sdc;
+    sdc.SetVtxBoundaryInterpolation(m.boundary);
+    sdc.SetCreasingMethod(m.creaseMethod);
+    sdc.SetTriangleSubdivision(m.triangles);
+    using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+    Far::TopologyRefiner *r = Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, sdc));
+    if (!r || gFarError) fail("OpenSubdiv rejected the mesh topology");
+    return r;
+}
+
+// Positions of every level of `r` (level 0 = control points), concatenated.
+std::vector<Point3> interpolateAll(Far::TopologyRefiner const &r, std::vector<Point3> const &base, size_t extra) {
+    std::vector<Point3> all(size_t(r.GetNumVerticesTotal()) + extra, Point3{0, 0, 0});
+    std::copy(base.begin(), base.end(), all.begin());
+    Far::PrimvarRefinerReal<double> primvar(r);
+    Point3 *src = all.data();
+    for (int l = 1; l <= r.GetMaxLevel(); ++l) {
+        Point3 *dst = src + r.GetLevel(l - 1).GetNumVertices();
+        primvar.Interpolate(l, src, dst);
+        src = dst;
+    }
+    return all;
+}
+
+void refineUniform(Mesh const &m, int levels) {
+    Far::TopologyRefiner *r = createRefiner(m);
+    Far::TopologyRefiner::UniformOptions uopts(levels);
+    uopts.fullTopologyInLastLevel = true;
+    r->RefineUniform(uopts);
+    if (gFarError || r->GetMaxLevel() != levels) fail("RefineUniform failed");
+    std::vector<Point3> all = interpolateAll(*r, m.positions, 0);
+    size_t start = 0;
+    for (int l = 0; l <= levels; ++l) {
+        Far::TopologyLevel const &lv = r->GetLevel(l);
+        if (l > 0) {
+            std::printf("level %d %d %d\n", l, lv.GetNumVertices(), lv.GetNumFaces());
+            for (int v = 0; v < lv.GetNumVertices(); ++v) {
+                Point3 const &p = all[start + size_t(v)];
+                std::printf("%.17g %.17g %.17g\n", p.x, p.y, p.z);
+            }
+            if (std::getenv("OSD_ORACLE_SHARPNESS")) {
+                // Debugging aid: every sharp edge and vertex of the level, on stderr.
+                for (int e = 0; e < lv.GetNumEdges(); ++e) {
+                    Far::ConstIndexArray ev = lv.GetEdgeVertices(e);
+                    if (lv.GetEdgeSharpness(e) > 0)
+                        std::fprintf(stderr, "level %d edge %d %d sharpness %.9g\n", l, ev[0], ev[1],
+                                     lv.GetEdgeSharpness(e));
+                }
+                for (int v = 0; v < lv.GetNumVertices(); ++v)
+                    if (lv.GetVertexSharpness(v) > 0)
+                        std::fprintf(stderr, "level %d vertex %d sharpness %.9g\n", l, v, lv.GetVertexSharpness(v));
+            }
+            for (int f = 0; f < lv.GetNumFaces(); ++f) {
+                Far::ConstIndexArray fv = lv.GetFaceVertices(f);
+                std::printf("%d %d", lv.IsFaceHole(f) ? 1 : 0, fv.size());
+                for (int k = 0; k < fv.size(); ++k) std::printf(" %d", fv[k]);
+                std::printf("\n");
+            }
+        }
+        start += size_t(lv.GetNumVertices());
+    }
+    delete r;
+}
+
+char const *typeName(Far::PatchDescriptor::Type t) {
+    switch (t) {
+        case Far::PatchDescriptor::REGULAR: return "REGULAR";
+        case Far::PatchDescriptor::GREGORY: return "GREGORY";
+        case Far::PatchDescriptor::GREGORY_BOUNDARY: return "GREGORY_BOUNDARY";
+        case Far::PatchDescriptor::GREGORY_BASIS: return "GREGORY_BASIS";
+        case Far::PatchDescriptor::QUADS: return "QUADS";
+        case Far::PatchDescriptor::TRIANGLES: return "TRIANGLES";
+        case Far::PatchDescriptor::LOOP: return "LOOP";
+        case Far::PatchDescriptor::GREGORY_TRIANGLE: return "GREGORY_TRIANGLE";
+        default: return "OTHER";
+    }
+}
+
+void evaluate(Mesh const &m, int isolation, Far::PatchTableFactory::Options::EndCapType endcap) {
+    Far::TopologyRefiner *r = createRefiner(m);
+    Far::TopologyRefiner::AdaptiveOptions aopts(isolation);
+    aopts.useSingleCreasePatch = false;
+    aopts.useInfSharpPatch = true;
+    r->RefineAdaptive(aopts);
+    if (gFarError) fail("RefineAdaptive failed");
+
+    Far::PatchTableFactory::Options popts(isolation);
+    popts.SetEndCapType(endcap);
+    popts.useSingleCreasePatch = false;
+    popts.useInfSharpPatch = true;
+    popts.SetPatchPrecision<double>();
+    Far::PatchTable const *pt = Far::PatchTableFactory::Create(*r, popts);
+    if (!pt || gFarError) fail("PatchTableFactory::Create failed");
+
+    size_t nRefined = size_t(r->GetNumVerticesTotal());
+    int nLocal = pt->GetNumLocalPoints();
+    std::vector<Point3> all = interpolateAll(*r, m.positions, size_t(nLocal));
+    if (nLocal > 0) {
+        Far::StencilTableReal<double> const *local = pt->GetLocalPointStencilTable<double>();
+        if (!local) fail("no double-precision local point stencils");
+        local->UpdateValues(all.data(), all.data() + nRefined);
+    }
+    Far::PatchMap map(*pt);
+    Far::PtexIndices ptex(*r);
+    int nBase = r->GetLevel(0).GetNumFaces();
+
+    std::vector<std::string> lines;
+    std::string text;
+    while (std::getline(std::cin, text)) {
+        std::istringstream ls(text);
+        long face, k;
+        double u, v;
+        if (!(ls >> face >> k >> u >> v)) {
+            if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
+            fail("bad sample line '" + text + "'");
+        }
+        char buf[1024];
+        int n = face >= 0 && face < nBase ? r->GetLevel(0).GetFaceVertices(int(face)).size() : 0;
+        if (n == 0 || k < 0 || k >= (n == 4 ? 1 : n)) fail("bad sample face/k in '" + text + "'");
+        int id = ptex.GetFaceId(int(face)) + int(k);
+        Far::PatchTable::PatchHandle const *h = map.FindPatch(id, u, v);
+        if (!h) {
+            lines.push_back("none");
+            continue;
+        }
+        double w[6][20];
+        pt->EvaluateBasis(*h, u, v, w[0], w[1], w[2], w[3], w[4], w[5]);
+        Far::ConstIndexArray cvs = pt->GetPatchVertices(*h);
+        double out[6][3] = {};
+        for (int c = 0; c < cvs.size(); ++c) {
+            Point3 const &p = all[size_t(cvs[c])];
+            for (int d = 0; d < 6; ++d) {
+                out[d][0] += w[d][c] * p.x;
+                out[d][1] += w[d][c] * p.y;
+                out[d][2] += w[d][c] * p.z;
+            }
+        }
+        // Far 3.5 scales the derivatives of patches under a non-quad face by 2^depth, where
+        // the ptex sub-face's (u, v) needs 2^(depth-1) (PatchParam::GetParamFraction has the
+        // -NonQuadRoot(), the derivative scaling does not): measured against finite differences
+        // of Far's own positions, its first derivatives there are twice the sub-face's. Undo it.
+        if (pt->GetPatchParam(*h).NonQuadRoot()) {
+            for (int c = 0; c < 3; ++c) {
+                out[1][c] *= 0.5, out[2][c] *= 0.5;
+                out[3][c] *= 0.25, out[4][c] *= 0.25, out[5][c] *= 0.25;
+            }
+        }
+        int len = std::snprintf(buf, sizeof buf, "ok %s %d",
+                                typeName(pt->GetPatchDescriptor(*h).GetType()),
+                                pt->GetPatchParam(*h).GetDepth());
+        for (int d = 0; d < 6; ++d)
+            for (int c = 0; c < 3; ++c) len += std::snprintf(buf + len, sizeof buf - size_t(len), " %.17g", out[d][c]);
+        lines.push_back(buf);
+    }
+    std::printf("eval %zu\n", lines.size());
+    for (auto const &l : lines) std::printf("%s\n", l.c_str());
+    delete pt;
+    delete r;
+}
+
+void usage() {
+    std::fprintf(stderr,
+                 "usage: osd_oracle MESH.obj [--refine N] [--eval] [--endcap gregory|bspline|legacy] "
+                 "[--isolation L]\n");
+    std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    Far::SetErrorCallback(onFarError);
+    Far::SetWarningCallback(onFarWarning);
+    std::string path;
+    int levels = 0, isolation = 10;
+    bool eval = false;
+    auto endcap = Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS;
+    for (int a = 1; a < argc; ++a) {
+        std::string arg = argv[a];
+        try {
+            if (arg == "--refine" && a + 1 < argc) {
+                levels = int(parseInt(argv[++a], "--refine"));
+                if (levels < 1 || levels > 8) throw std::runtime_error("--refine must be 1..8");
+            } else if (arg == "--isolation" && a + 1 < argc) {
+                isolation = int(parseInt(argv[++a], "--isolation"));
+                if (isolation < 1 || isolation > 10) throw std::runtime_error("--isolation must be 1..10");
+            } else if (arg == "--eval") {
+                eval = true;
+            } else if (arg == "--endcap" && a + 1 < argc) {
+                std::string e = argv[++a];
+                if (e == "gregory") endcap = Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS;
+                else if (e == "bspline") endcap = Far::PatchTableFactory::Options::ENDCAP_BSPLINE_BASIS;
+                else if (e == "legacy") endcap = Far::PatchTableFactory::Options::ENDCAP_LEGACY_GREGORY;
+                else throw std::runtime_error("unknown end cap '" + e + "'");
+            } else if (!arg.empty() && arg[0] != '-' && path.empty()) {
+                path = arg;
+            } else {
+                usage();
+            }
+        } catch (std::exception const &e) {
+            fail(e.what());
+        }
+    }
+    if (path.empty() || (levels == 0 && !eval)) usage();
+    Mesh m = readObj(path);
+    if (levels > 0) refineUniform(m, levels);
+    if (eval) evaluate(m, isolation, endcap);
+    return 0;
+}
