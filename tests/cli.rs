@@ -333,13 +333,6 @@ fn bad_obj_exits_2_with_file_and_line() {
         5,
         "out of range",
     );
-    check_bad_obj(
-        &dir,
-        "repeated.obj",
-        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\nf 1 2 3 3\n",
-        6,
-        "appears twice",
-    );
 }
 
 #[test]

@@ -1,23 +1,14 @@
 //! Every Catmull-Clark model of OpenSubdiv's regression corpus (../shared/models/opensubdiv)
 //! loads, refines to level 2 with finite positions, and has finite limit frames at level 1 —
-//! except the few that are rejected by design (faces that repeat a vertex).
+//! the shapes whose faces repeat a vertex (`f 4 3 5 5`, degenerate edges, as OpenSubdiv keeps
+//! them) included.
 
 mod common;
 
 use limitray::mesh::obj::read_obj;
 use limitray::refine::limit::LimitStencils;
 use limitray::refine::Refiner;
-use limitray::ErrorKind;
 use std::time::Instant;
-
-/// Models whose faces repeat a vertex (`f 4 3 5 5`): OpenSubdiv keeps such faces as degenerate
-/// edges; this library rejects them.
-const REJECTED: [&str; 4] = [
-    "catmark_nonman_edges",
-    "catmark_nonman_quadpole8",
-    "catmark_nonman_quadpole64",
-    "catmark_nonman_quadpole360",
-];
 
 /// Meshes with more level-1 vertices than this are refined but skip the limit frames (none of
 /// the corpus does today: the whole test takes well under a second).
@@ -41,7 +32,6 @@ fn every_catmark_model_loads_refines_and_has_finite_limits() {
 
     let start = Instant::now();
     let mut failures: Vec<String> = Vec::new();
-    let mut rejected_seen = Vec::new();
     let (mut loaded, mut framed) = (0usize, 0usize);
     println!(
         "{:<34} {:>7} {:>7} {:>9} {:>9} {:>8}  result",
@@ -50,46 +40,13 @@ fn every_catmark_model_loads_refines_and_has_finite_limits() {
     for path in &files {
         let name = path.file_stem().unwrap().to_str().unwrap().to_string();
         let t0 = Instant::now();
-        let expected_reject = REJECTED.contains(&name.as_str());
         let mesh = match read_obj(path) {
             Ok(m) => m,
             Err(e) => {
-                if expected_reject {
-                    rejected_seen.push(name.clone());
-                    let mut why = Vec::new();
-                    if e.kind != ErrorKind::Topology {
-                        why.push(format!("kind {:?}", e.kind));
-                    }
-                    if e.line.is_none() {
-                        why.push("no line number".to_string());
-                    }
-                    if !e.message.contains("appears twice") {
-                        why.push("message lacks \"appears twice\"".to_string());
-                    }
-                    if why.is_empty() {
-                        println!(
-                            "{name:<34} {:>7} {:>7} {:>9} {:>9} {:>8}  rejected as expected: {e}",
-                            "-",
-                            "-",
-                            "-",
-                            "-",
-                            t0.elapsed().as_millis()
-                        );
-                    } else {
-                        failures.push(format!("{name}: wrong rejection ({}): {e}", why.join(", ")));
-                    }
-                } else {
-                    failures.push(format!("{name}: failed to load: {e}"));
-                }
+                failures.push(format!("{name}: failed to load: {e}"));
                 continue;
             }
         };
-        if expected_reject {
-            failures.push(format!(
-                "{name}: expected to be rejected (repeated vertex in a face) but loaded"
-            ));
-            continue;
-        }
         loaded += 1;
         let refiner = match Refiner::new(&mesh, 2) {
             Ok(r) => r,
@@ -136,16 +93,10 @@ fn every_catmark_model_loads_refines_and_has_finite_limits() {
         );
     }
     println!(
-        "{} models: {loaded} loaded, {framed} with limit frames, {} rejected by design, {:.2} s",
+        "{} models: {loaded} loaded, {framed} with limit frames, {:.2} s",
         files.len(),
-        rejected_seen.len(),
         start.elapsed().as_secs_f64()
     );
-    for name in REJECTED {
-        if !files.iter().any(|p| p.file_stem().unwrap() == name) {
-            failures.push(format!("{name}: expected in the corpus but missing"));
-        }
-    }
     assert!(
         failures.is_empty(),
         "{} failure(s):\n{}",

@@ -17,14 +17,6 @@ use limitray::refine::Refiner;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Shapes rejected by design (faces repeating a vertex); see tests/corpus.rs.
-const REJECTED: [&str; 4] = [
-    "catmark_nonman_edges",
-    "catmark_nonman_quadpole8",
-    "catmark_nonman_quadpole64",
-    "catmark_nonman_quadpole360",
-];
-
 fn reference_binary() -> Option<PathBuf> {
     let bin = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/osd/osd_refine_bench");
     if bin.is_file() {
@@ -80,9 +72,6 @@ fn refinement_matches_opensubdiv_far_on_corpus() {
     let mut compared = 0;
     for path in &files {
         let name = path.file_stem().unwrap().to_str().unwrap();
-        if REJECTED.contains(&name) {
-            continue;
-        }
         let mesh = read_obj(path).unwrap();
         // Every shape with the uniform rule (or its own tag); creased ones with Chaikin too.
         let mut runs = vec![false];

@@ -729,14 +729,41 @@ fn isolated_vertex_is_kept_and_does_not_move() {
 }
 
 #[test]
-fn repeated_vertex_in_a_face_is_rejected() {
-    let err = MeshBuilder::new()
+fn repeated_vertex_in_a_face_is_a_degenerate_edge() {
+    // OpenSubdiv keeps a face that repeats a vertex: the repeated pair is a degenerate edge,
+    // tagged non-manifold and so infinitely sharp, and the vertex is a non-manifold corner.
+    let mesh = MeshBuilder::new()
         .positions(cube_positions())
-        .faces(&[4], &[0, 1, 3, 3])
+        .faces(&[4, 4], &[0, 1, 3, 3, 1, 0, 4, 5])
         .build()
-        .unwrap_err();
-    assert_eq!(err.kind, ErrorKind::Topology);
-    assert!(err.message.contains("appears twice"), "{err}");
+        .unwrap();
+    let r = Refiner::new(&mesh, 3).unwrap();
+    let t = &r.levels[0].topo;
+    let e = t.find_edge(3, 3).expect("the degenerate edge exists");
+    assert!(t.edge_nonmanifold[e as usize]);
+    assert!(t.vert_tags[3].nonmanifold);
+    assert!(crease_is_infinite(r.levels[0].edge_sharpness[e as usize]));
+    for l in 0..=3 {
+        let p = r.refine_positions(&mesh.positions, l);
+        assert!(p.iter().all(finite), "level {l}");
+    }
+    // The corner stays where it is; the degenerate edge's edge point sits on it.
+    let p1 = r.refine_positions(&mesh.positions, 1);
+    assert_eq!(p1[3], mesh.positions[3]);
+    // A face using the same edge twice (a vertex repeated apart) is non-manifold too.
+    let mesh = MeshBuilder::new()
+        .positions(cube_positions())
+        .faces(&[4], &[0, 1, 0, 2])
+        .build()
+        .unwrap();
+    let r = Refiner::new(&mesh, 2).unwrap();
+    let t = &r.levels[0].topo;
+    assert!(t.edge_nonmanifold[t.find_edge(0, 1).unwrap() as usize]);
+    assert!(r.refine_positions(&mesh.positions, 2).iter().all(finite));
+}
+
+fn crease_is_infinite(s: f32) -> bool {
+    s >= limitray::mesh::SHARPNESS_INFINITE
 }
 
 fn dist(p: &[f64; 3], q: &[f64; 3]) -> f64 {

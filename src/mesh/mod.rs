@@ -164,8 +164,8 @@ impl ControlMesh {
         e
     }
 
-    /// Checks everything that does not need edge topology: face sizes, index ranges, repeated
-    /// vertices in a face, coordinates (finite and within [`crate::numeric::MAX_COORD`]), tag
+    /// Checks everything that does not need edge topology: face sizes, index ranges,
+    /// coordinates (finite and within [`crate::numeric::MAX_COORD`]), tag
     /// indices and sharpness values.
     /// Topology-level checks (non-manifold configurations) are made by [`Topology::new`].
     pub fn validate(&self) -> Result<()> {
@@ -222,7 +222,7 @@ impl ControlMesh {
                     format!("face has {} vertices; at least 3 are needed", fv.len()),
                 ));
             }
-            for (j, &v) in fv.iter().enumerate() {
+            for &v in fv {
                 if v as usize >= nv {
                     return Err(self.error_at(
                         ErrorKind::Topology,
@@ -231,16 +231,6 @@ impl ControlMesh {
                             "vertex index {} is out of range (mesh has {} vertices)",
                             v + 1,
                             nv
-                        ),
-                    ));
-                }
-                if fv[..j].contains(&v) {
-                    return Err(self.error_at(
-                        ErrorKind::Topology,
-                        Element::Face(f),
-                        format!(
-                            "vertex {} appears twice in the face (degenerate face)",
-                            v + 1
                         ),
                     ));
                 }

@@ -46,6 +46,10 @@ pub struct Features {
     /// Turn Chaikin meshes with `interpolateboundary 0` into the other boundary modes (a
     /// known, not yet understood difference, see `chaikin_with_boundary_none_open_difference`).
     pub skip_chaikin_boundary_none: bool,
+    /// Non-manifold edges (a fin face on an existing edge) and degenerate faces (a triangle
+    /// whose last vertex is repeated, as in the corpus's catmark_nonman_quadpole shapes), drawn
+    /// from a stream of their own so that the other features' meshes stay as they were.
+    pub nonmanifold: bool,
 }
 
 /// A generated control mesh with its tags.
@@ -412,9 +416,35 @@ pub fn generate(seed: u64, features: Features) -> GenMesh {
     if features.smooth_triangles && m.faces.iter().any(|f| f.len() == 3) {
         m.smooth_triangles = rng.chance(0.5);
     }
+    if features.nonmanifold {
+        let mut r2 = Rng::new(seed ^ 0x6e6f_6e6d_616e_0000);
+        if r2.chance(0.15) {
+            fin(&mut m, &mut r2);
+            recipe.push_str(" fin");
+        }
+        if r2.chance(0.15) {
+            if let Some(f) = (0..m.faces.len()).find(|&f| m.faces[f].len() == 3) {
+                let last = m.faces[f][2];
+                m.faces[f].push(last);
+                write!(recipe, " degenerate@{f}").unwrap();
+            }
+        }
+    }
     m.compact();
     m.recipe = recipe;
     m
+}
+
+/// Adds a quad "fin" on a random edge of the mesh: the edge then has one face more (three on
+/// a closed mesh), which makes it non-manifold.
+fn fin(m: &mut GenMesh, rng: &mut Rng) {
+    let edges = m.edges();
+    let (a, b) = edges[rng.below(edges.len())];
+    let (pa, pb) = (m.positions[a as usize], m.positions[b as usize]);
+    let off = [0.1, 0.35, 0.25];
+    let c = m.add_vertex([pb[0] + off[0], pb[1] + off[1], pb[2] + off[2]]);
+    let d = m.add_vertex([pa[0] + off[0], pa[1] + off[1], pa[2] + off[2]]);
+    m.faces.push(vec![a, b, c, d]);
 }
 
 /// `(face, k, u, v)` samples over the mesh, biased towards corners, edges and points close to
