@@ -106,27 +106,60 @@ impl Topology {
         keys.sort_unstable();
         let mut face_edges = vec![0u32; nfv];
         let mut edge_verts: Vec<[u32; 2]> = Vec::new();
+        // Edges that are non-manifold whatever their face count (OpenSubdiv's rules for faces
+        // that repeat a vertex): a degenerate pair (v, v) is a new edge at each use; an edge
+        // met again in the face that used it last is a new instance, and both are non-manifold.
+        let mut forced = Vec::new();
+        let face_of = |fv: u32| face_offsets.partition_point(|&o| o <= fv) - 1;
         let mut i = 0;
         while i < keys.len() {
             let key = keys[i].0;
-            let e = edge_verts.len() as u32;
+            let (lo, hi) = ((key >> 32) as u32, key as u32);
             let mut j = i;
+            // The first instance of the pair, and the face that used it last.
+            let mut first: Option<(u32, usize)> = None;
             while j < keys.len() && keys[j].0 == key {
-                face_edges[keys[j].1 as usize] = e;
+                let fv = keys[j].1 as usize;
+                let f = face_of(fv as u32);
+                let v0 = face_verts[fv];
+                let new_edge = |edge_verts: &mut Vec<[u32; 2]>| {
+                    edge_verts.push(if v0 == lo { [lo, hi] } else { [hi, lo] });
+                    (edge_verts.len() - 1) as u32
+                };
+                let e = if lo == hi {
+                    let e = new_edge(&mut edge_verts);
+                    forced.push(e);
+                    e
+                } else {
+                    match first {
+                        None => {
+                            let e = new_edge(&mut edge_verts);
+                            first = Some((e, f));
+                            e
+                        }
+                        Some((e0, last)) if last == f => {
+                            let e = new_edge(&mut edge_verts);
+                            forced.extend([e0, e]);
+                            e
+                        }
+                        Some((e0, _)) => {
+                            first = Some((e0, f));
+                            e0
+                        }
+                    }
+                };
+                face_edges[fv] = e;
                 j += 1;
             }
-            // Keep the first use's direction.
-            let (lo, hi) = ((key >> 32) as u32, key as u32);
-            let v0 = face_verts[keys[i].1 as usize];
-            edge_verts.push(if v0 == lo { [lo, hi] } else { [hi, lo] });
             i = j;
         }
-        Ok(Self::from_edges(
+        Ok(Self::from_edges_with_nonmanifold(
             num_vertices,
             face_offsets.to_vec(),
             face_verts.to_vec(),
             face_edges,
             edge_verts,
+            &forced,
         ))
     }
 
@@ -140,6 +173,26 @@ impl Topology {
         face_verts: Vec<u32>,
         face_edges: Vec<u32>,
         edge_verts: Vec<[u32; 2]>,
+    ) -> Self {
+        Self::from_edges_with_nonmanifold(
+            num_vertices,
+            face_offsets,
+            face_verts,
+            face_edges,
+            edge_verts,
+            &[],
+        )
+    }
+
+    /// [`Self::from_edges`], with the edges in `forced` non-manifold whatever their faces
+    /// (cut-outs of a level keep the level's non-manifold edges so).
+    pub fn from_edges_with_nonmanifold(
+        num_vertices: usize,
+        face_offsets: Vec<u32>,
+        face_verts: Vec<u32>,
+        face_edges: Vec<u32>,
+        edge_verts: Vec<[u32; 2]>,
+        forced: &[u32],
     ) -> Self {
         let nf = face_offsets.len().saturating_sub(1);
         let nfv = face_verts.len();
@@ -183,6 +236,9 @@ impl Topology {
             if fs.len() == 2 && fs[0] == fs[1] {
                 edge_nonmanifold[e] = true;
             }
+        }
+        for &e in forced {
+            edge_nonmanifold[e as usize] = true;
         }
         // Vertex -> face corners, unordered first.
         let mut vcount = vec![0u32; num_vertices];

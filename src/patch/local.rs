@@ -109,27 +109,55 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
     }
     let mut vmap: HashMap<u32, u32> = HashMap::new();
     let mut verts_old = Vec::new();
+    let mut emap: HashMap<u32, u32> = HashMap::new();
+    let mut edges_old = Vec::new();
     let mut offsets = vec![0u32];
     let mut fverts = Vec::new();
+    let mut fedges = Vec::new();
     for &f in &faces {
-        for &v in topo.face_vertices(f as usize) {
+        for (&v, &e) in topo
+            .face_vertices(f as usize)
+            .iter()
+            .zip(topo.face_edge_list(f as usize))
+        {
             let id = *vmap.entry(v).or_insert_with(|| {
                 verts_old.push(v);
                 (verts_old.len() - 1) as u32
             });
             fverts.push(id);
+            let eid = *emap.entry(e).or_insert_with(|| {
+                edges_old.push(e);
+                (edges_old.len() - 1) as u32
+            });
+            fedges.push(eid);
         }
         offsets.push(fverts.len() as u32);
     }
-    let sub = Topology::new(verts_old.len(), &offsets, &fverts)
-        .expect("a cut-out of a valid level is valid");
-    let edge_sharpness = sub
-        .edge_verts
+    // The cut-out keeps the level's edges as they are (not re-discovered from vertex pairs):
+    // below a face that repeats a vertex, two distinct edges can join the same two vertices
+    // (the halves of a degenerate edge), and they must stay apart. Edges that are
+    // non-manifold in the level stay so in the cut-out.
+    let edge_verts = edges_old
         .iter()
-        .map(|&[a, b]| {
-            topo.find_edge(verts_old[a as usize], verts_old[b as usize])
-                .map_or(0.0, |e| level.edge_sharpness[e as usize])
-        })
+        .map(|&e| topo.edge_verts[e as usize].map(|v| vmap[&v]))
+        .collect();
+    let nonmanifold: Vec<u32> = edges_old
+        .iter()
+        .enumerate()
+        .filter(|(_, &e)| topo.edge_nonmanifold[e as usize])
+        .map(|(i, _)| i as u32)
+        .collect();
+    let sub = Topology::from_edges_with_nonmanifold(
+        verts_old.len(),
+        offsets,
+        fverts,
+        fedges,
+        edge_verts,
+        &nonmanifold,
+    );
+    let edge_sharpness = edges_old
+        .iter()
+        .map(|&e| level.edge_sharpness[e as usize])
         .collect();
     let vertex_sharpness = verts_old
         .iter()

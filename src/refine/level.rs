@@ -77,15 +77,24 @@ impl Level {
             let faces = topo.vertex_faces(v).len();
             let edges = topo.vertex_edges(v);
             if tag.nonmanifold {
-                let nonman_edges = edges
-                    .iter()
-                    .filter(|&&e| topo.edge_nonmanifold[e as usize])
-                    .count();
-                // A vertex in the middle of a chain of non-manifold edges is a crease.
-                let on_nonmanifold_crease = nonman_edges == 2
-                    && edges.iter().all(|&e| {
-                        topo.edge_nonmanifold[e as usize] || topo.edge_face_count(e) == 2
-                    });
+                // OpenSubdiv sharpens every non-manifold vertex except one inside an interior
+                // non-manifold crease: two non-manifold edges, no edge with fewer than two
+                // faces, and more faces than edges (a fin adds a face, not an edge). A
+                // degenerate edge counts twice (both its ends are here).
+                let (mut nonman_edges, mut boundary_edges, mut edge_count) = (0, 0, 0);
+                for &e in edges {
+                    let [a, b] = topo.edge_verts[e as usize];
+                    let uses = if a == b { 2 } else { 1 };
+                    edge_count += uses;
+                    if topo.edge_nonmanifold[e as usize] {
+                        nonman_edges += uses;
+                    }
+                    if topo.edge_face_count(e) < 2 {
+                        boundary_edges += uses;
+                    }
+                }
+                let on_nonmanifold_crease =
+                    nonman_edges == 2 && boundary_edges == 0 && faces > edge_count;
                 if !on_nonmanifold_crease {
                     vertex_sharpness[v] = SHARPNESS_INFINITE;
                 }

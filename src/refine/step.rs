@@ -92,8 +92,13 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             edge_verts.push([child_of_edge(parent, e as usize), cf]);
         }
     }
-    // Half of parent edge e that touches parent vertex v.
-    let half = |e: u32, v: u32| 2 * e + (topo.edge_verts[e as usize][0] != v) as u32;
+    // Half of parent edge e that touches parent vertex v: `lead` for the face's edge leaving
+    // v, otherwise the one arriving at it. A degenerate edge (both ends v, used by one face)
+    // leaves v by its first half and arrives by its second.
+    let half = |e: u32, v: u32, lead: bool| {
+        let [a, b] = topo.edge_verts[e as usize];
+        2 * e + if a == b { !lead } else { a != v } as u32
+    };
 
     // Child faces: quad k of face f is (v_k, edge point k, face point, edge point k-1).
     let mut face_offsets = Vec::with_capacity(nfv + 1);
@@ -115,10 +120,10 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
                 child_of_edge(parent, fe[prev] as usize),
             ]);
             face_edges.extend_from_slice(&[
-                half(fe[k], fv[k]),
+                half(fe[k], fv[k], true),
                 (2 * ne) as u32 + o + k as u32,
                 (2 * ne) as u32 + o + prev as u32,
-                half(fe[prev], fv[k]),
+                half(fe[prev], fv[k], false),
             ]);
             face_offsets.push(face_verts.len() as u32);
             face_hole.push(parent.face_hole[f]);
@@ -139,8 +144,13 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
         for v in 0..nv {
             child_sharpness_at(parent, method, v, &mut buf);
             for (&e, &s) in topo.vertex_edges(v).iter().zip(&buf) {
-                let end = (topo.edge_verts[e as usize][0] != v as u32) as usize;
-                halves[e as usize][end] = s;
+                let [a, b] = topo.edge_verts[e as usize];
+                if a == b {
+                    // A degenerate edge: both halves end at v.
+                    halves[e as usize] = [s, s];
+                } else {
+                    halves[e as usize][(a != v as u32) as usize] = s;
+                }
             }
         }
     }
