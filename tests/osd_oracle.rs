@@ -154,6 +154,102 @@ fn soak() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// Every Catmull-Clark shape of OpenSubdiv's corpus (`../shared/models/opensubdiv`), through
+/// the same comparison as the random meshes: uniform refinement to level 3 (level 2 or 1 for
+/// the largest shapes, so that the compared level stays under ~200,000 faces) and 200
+/// evaluation samples per shape (biased to corners and edges), with and without single-crease
+/// patches on alternate shapes. Hierarchical edits and face-varying data are dropped on both
+/// sides (Far has no edits; face-varying data does not change the vertex surface).
+#[test]
+fn corpus_matches_far() {
+    let models = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/opensubdiv");
+    if !models.is_dir() {
+        println!("note: skipping: ../shared/models/opensubdiv is not present");
+        return;
+    }
+    let Some(bin) = oracle::far::binary() else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("limitray-oracle-corpus-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(&models)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.extension().is_some_and(|x| x == "obj")
+                && p.file_name()
+                    .unwrap()
+                    .to_string_lossy()
+                    .starts_with("catmark_")
+        })
+        .collect();
+    paths.sort();
+    assert!(paths.len() >= 80, "expected the corpus's catmark shapes");
+    let results: Vec<(String, Result<(Worst, Option<String>), String>)> = paths
+        .par_iter()
+        .enumerate()
+        .map(|(i, path)| {
+            let name = path.file_stem().unwrap().to_string_lossy().to_string();
+            let mesh = match limitray::mesh::obj::read_obj(path) {
+                Ok(m) => m,
+                Err(e) => return (name, Err(format!("does not load: {e}"))),
+            };
+            let gm = oracle::gen::GenMesh::from_control_mesh(&mesh);
+            let mut levels = 3;
+            while levels > 1 && gm.faces.len() << (2 * levels) > 200_000 {
+                levels -= 1;
+            }
+            let mut rng = oracle::gen::Rng::new(i as u64 + 17);
+            let samples = oracle::gen::samples(&gm, &mut rng, 200);
+            let case = Case {
+                mesh: gm,
+                samples,
+                levels,
+                single_crease: i % 2 == 0,
+            };
+            let sub = dir.join(&name);
+            std::fs::create_dir_all(&sub).unwrap();
+            match oracle::run(&bin, &sub, &case) {
+                None => (name, Err("Far refuses it".to_string())),
+                Some((w, f)) => (
+                    name,
+                    Ok((w, f.map(|f| format!("{} {}", f.category, f.detail)))),
+                ),
+            }
+        })
+        .collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut worst = Worst::default();
+    let mut failures = Vec::new();
+    for (name, r) in &results {
+        match r {
+            Ok((w, f)) => {
+                println!(
+                    "{name:34} refine {:.1e} eval {:.1e} exact {:.1e} d1 {:.1e} d2 {:.1e}{}",
+                    w.refine,
+                    w.eval,
+                    w.exact,
+                    w.d1,
+                    w.d2,
+                    f.as_ref().map_or(String::new(), |f| format!("  FAIL {f}"))
+                );
+                worst.merge(w);
+                if let Some(f) = f {
+                    failures.push(format!("{name}: {f}"));
+                }
+            }
+            Err(e) => failures.push(format!("{name}: {e}")),
+        }
+    }
+    report(&worst, results.len() as u64, 0);
+    assert!(
+        failures.is_empty(),
+        "{} corpus shapes differ from Far:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
 /// Runs one case against Far and asserts it agrees.
 fn assert_case_matches(name: &str, case: &Case) {
     let Some(bin) = oracle::far::binary() else {

@@ -74,6 +74,30 @@ fn key(a: u32, b: u32) -> (u32, u32) {
 }
 
 impl GenMesh {
+    /// A parsed mesh (positions, faces, creases, corners, holes and options) as a case mesh.
+    pub fn from_control_mesh(m: &limitray::mesh::ControlMesh) -> GenMesh {
+        use limitray::mesh::{BoundaryInterpolation, CreaseMethod};
+        GenMesh {
+            positions: m.positions.clone(),
+            faces: (0..m.num_faces()).map(|f| m.face(f).to_vec()).collect(),
+            creases: m
+                .creases
+                .iter()
+                .map(|c| (key(c.v0, c.v1), c.sharpness))
+                .collect(),
+            corners: m.corners.iter().map(|c| (c.vertex, c.sharpness)).collect(),
+            holes: m.holes.clone(),
+            boundary: match m.options.boundary {
+                BoundaryInterpolation::None => 0,
+                BoundaryInterpolation::EdgeAndCorner => 1,
+                BoundaryInterpolation::EdgeOnly => 2,
+            },
+            chaikin: m.options.crease_method == CreaseMethod::Chaikin,
+            smooth_triangles: m.options.smooth_triangles,
+            recipe: String::from("parsed mesh"),
+        }
+    }
+
     /// The mesh as OBJ text with OpenSubdiv tags (0-based tag indices).
     pub fn to_obj(&self) -> String {
         let mut s = String::new();
