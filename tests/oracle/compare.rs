@@ -8,7 +8,8 @@
 //!   isolation, infinitely sharp creases as boundaries): position 1e-6 of the diagonal, first
 //!   and second derivatives 1e-5 relative to the largest derivative of the sample (at least 1e-2
 //!   of the diagonal, so that a vanishing derivative does not turn rounding into failures).
-//! - Where Far approximates — its end caps (GREGORY_BASIS) and every patch at its maximum
+//! - Where Far approximates — its end caps (GREGORY_BASIS), every patch of a Chaikin mesh with
+//!   boundary interpolation `none` (see `compare`), and every patch at its maximum
 //!   isolation level (10, where it also puts REGULAR patches over irregular boundary vertices)
 //!   — our evaluation is compared with the exact limit instead: at dyadic samples, with the
 //!   limit mask of the vertex that the point becomes after local refinement ([`super::exact`]),
@@ -227,13 +228,18 @@ pub fn compare(
             return (worst, Some(f));
         }
     };
+    // Far's adaptive patches on Chaikin meshes with boundary interpolation `none` differ from
+    // the limit of Far's own uniform refinement (which limitray matches to 1e-16 on them) by up
+    // to 1e-3 of the diagonal next to the excluded boundary faces; there the exact limit is
+    // the reference (tests/osd_oracle.rs, `chaikin_with_boundary_none_far_is_approximate`).
+    let far_exact = !(m.chaikin && m.boundary == 0);
     let mut failure = None;
     for (&s, theirs) in samples.iter().zip(&far.samples) {
         let ours = table
             .eval(FaceCoord::new(s.0 as u32, s.1 as u32, s.2, s.3))
             .ok();
         let exact = || super::exact::limit_at(&mesh, s.0, s.1, s.2, s.3);
-        if let Some(f) = check_sample(&ours, theirs, diag, exact, &mut worst) {
+        if let Some(f) = check_sample(&ours, theirs, diag, far_exact, exact, &mut worst) {
             if failure.is_none() {
                 failure = Some(Failure {
                     category: f.0,
@@ -250,6 +256,7 @@ fn check_sample(
     ours: &Option<Sample>,
     theirs: &Option<FarSample>,
     diag: f64,
+    far_exact: bool,
     exact: impl FnOnce() -> Option<[f64; 3]>,
     worst: &mut Worst,
 ) -> Option<(&'static str, String)> {
@@ -261,7 +268,7 @@ fn check_sample(
     };
     worst.samples += 1;
     let e = dist(o.p, t.d[0]) / diag;
-    if t.kind != "REGULAR" || t.depth >= ISOLATION {
+    if t.kind != "REGULAR" || t.depth >= ISOLATION || !far_exact {
         worst.end_cap_samples += 1;
         worst.end_cap = worst.end_cap.max(e);
         if let Some(x) = exact() {

@@ -43,8 +43,9 @@ impl Rng {
 pub struct Features {
     /// `t smoothtriangles 0/0/1 smooth` on some meshes with triangles.
     pub smooth_triangles: bool,
-    /// Turn Chaikin meshes with `interpolateboundary 0` into the other boundary modes (a
-    /// known, not yet understood difference, see `chaikin_with_boundary_none_open_difference`).
+    /// Turn Chaikin meshes with `interpolateboundary 0` into the other boundary modes (as the
+    /// first regression tests were found; Far's adaptive patches are approximate on such
+    /// meshes, see `chaikin_with_boundary_none_far_is_approximate`).
     pub skip_chaikin_boundary_none: bool,
     /// Non-manifold edges (a fin face on an existing edge) and degenerate faces (a triangle
     /// whose last vertex is repeated, as in the corpus's catmark_nonman_quadpole shapes), drawn
@@ -433,8 +434,7 @@ pub fn generate(seed: u64, features: Features) -> GenMesh {
     m.boundary = rng.below(3) as u8;
     m.chaikin = rng.chance(0.3);
     if features.skip_chaikin_boundary_none && m.chaikin && m.boundary == 0 {
-        // Known open difference (tests/osd_oracle.rs,
-        // `chaikin_with_boundary_none_open_difference`): keep the mesh, change the mode.
+        // Keep the mesh, change the mode.
         m.boundary = 1 + rng.below(2) as u8;
     }
     if features.smooth_triangles && m.faces.iter().any(|f| f.len() == 3) {
