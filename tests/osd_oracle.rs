@@ -155,6 +155,9 @@ fn soak() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// One corpus shape's worst differences and failure, or why it was not compared.
+type ShapeResult = Result<(Worst, Option<String>), String>;
+
 /// Every Catmull-Clark shape of OpenSubdiv's corpus (`../shared/models/opensubdiv`), through
 /// the same comparison as the random meshes: uniform refinement to level 3 (level 2 or 1 for
 /// the largest shapes, so that the compared level stays under ~200,000 faces) and 200
@@ -186,7 +189,7 @@ fn corpus_matches_far() {
         .collect();
     paths.sort();
     assert!(paths.len() >= 80, "expected the corpus's catmark shapes");
-    let results: Vec<(String, Result<(Worst, Option<String>), String>)> = paths
+    let results: Vec<(String, ShapeResult)> = paths
         .par_iter()
         .enumerate()
         .map(|(i, path)| {
