@@ -171,6 +171,31 @@ fn refine_cube_level_2_writes_98_vertices_and_96_faces() {
 }
 
 #[test]
+fn smooth_triangles_flag_equals_the_tag() {
+    let dir = TempDir::new("smoothtris");
+    let tet = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+    let plain = dir.file("tet.obj", tet);
+    let tagged = dir.file(
+        "tet_tag.obj",
+        &format!("{tet}t smoothtriangles 0/0/1 smooth\n"),
+    );
+    let catmark = refine_to_file(&dir, &plain, "catmark.obj", &["--level", "2"]);
+    let flag = refine_to_file(
+        &dir,
+        &plain,
+        "flag.obj",
+        &["--level", "2", "--smooth-triangles"],
+    );
+    let tag = refine_to_file(&dir, &tagged, "tag.obj", &["--level", "2"]);
+    assert_eq!(points_of(&flag), points_of(&tag));
+    assert_ne!(
+        points_of(&flag),
+        points_of(&catmark),
+        "the smooth-triangle rule moves the edge points of triangles"
+    );
+}
+
+#[test]
 fn chaikin_and_boundary_options_are_accepted() {
     let dir = TempDir::new("options");
     let mesh = dir.file(

@@ -52,10 +52,18 @@ struct Surface {
     bvhs: Mutex<HashMap<u32, Arc<MeshBvh>>>,
 }
 
-fn options_for(mesh: &ControlMesh, chaikin: bool, boundary: Option<&str>) -> PyResult<Options> {
+fn options_for(
+    mesh: &ControlMesh,
+    chaikin: bool,
+    boundary: Option<&str>,
+    smooth_triangles: bool,
+) -> PyResult<Options> {
     let mut o = mesh.options;
     if chaikin {
         o.crease_method = CreaseMethod::Chaikin;
+    }
+    if smooth_triangles {
+        o.smooth_triangles = true;
     }
     if let Some(b) = boundary {
         o.boundary = match b {
@@ -117,7 +125,7 @@ fn check_rate(rate: u32) -> PyResult<()> {
 impl Surface {
     /// Reads an OBJ file (with OpenSubdiv tags) and builds the patch table.
     #[new]
-    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10))]
+    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false))]
     fn new(
         py: Python<'_>,
         path: std::path::PathBuf,
@@ -125,6 +133,7 @@ impl Surface {
         chaikin: bool,
         boundary: Option<&str>,
         max_level: usize,
+        smooth_triangles: bool,
     ) -> PyResult<Surface> {
         if scheme != "catmark" {
             return Err(usage(format!(
@@ -134,7 +143,7 @@ impl Surface {
         let boundary = boundary.map(str::to_owned);
         py.detach(move || -> PyResult<Surface> {
             let mesh = read_obj(Path::new(&path)).map_err(py_err)?;
-            let options = options_for(&mesh, chaikin, boundary.as_deref())?;
+            let options = options_for(&mesh, chaikin, boundary.as_deref(), smooth_triangles)?;
             let table = PatchTable::with_options(
                 &mesh,
                 options,

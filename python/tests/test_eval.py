@@ -11,6 +11,7 @@ CASES = [
     ("creased_cube", {}, []),
     ("creased_cube", {"chaikin": True, "max_level": 6}, ["--chaikin", "--max-level", "6"]),
     ("prism", {}, []),
+    ("prism", {"smooth_triangles": True}, ["--smooth-triangles"]),
     ("grid", {"boundary": "edge"}, ["--boundary", "edge"]),
     ("grid", {"boundary": "corner"}, ["--boundary", "corner"]),
     ("gear8", {"max_level": 4}, ["--max-level", "4"]),

@@ -28,7 +28,7 @@ impl From<Boundary> for BoundaryInterpolation {
     }
 }
 
-/// Rule overrides: `--chaikin`, `--boundary`.
+/// Rule overrides: `--chaikin`, `--boundary`, `--smooth-triangles`.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct RuleArgs {
     /// Use Chaikin's crease rule instead of the uniform one.
@@ -37,6 +37,10 @@ pub struct RuleArgs {
     /// Boundary interpolation (default: the mesh's tag, else corner = edge-and-corner).
     #[arg(long, value_enum)]
     pub boundary: Option<Boundary>,
+    /// OpenSubdiv's smooth-triangle rule (`TRI_SUB_SMOOTH`, tag `t smoothtriangles 0/0/1
+    /// smooth`): edge points next to triangles weight the triangles' face points more.
+    #[arg(long)]
+    pub smooth_triangles: bool,
 }
 
 impl RuleArgs {
@@ -48,6 +52,9 @@ impl RuleArgs {
         }
         if let Some(b) = self.boundary {
             o.boundary = b.into();
+        }
+        if self.smooth_triangles {
+            o.smooth_triangles = true;
         }
         o
     }

@@ -52,13 +52,15 @@ class Surface:
 
     ``scheme`` must be ``"catmark"``; ``chaikin`` selects Chaikin's crease rule; ``boundary`` is
     ``None`` (the mesh's tag, else edge-and-corner), ``"none"``, ``"edge"`` or ``"corner"``;
-    ``max_level`` is the patch table's maximum isolation level. The mesh reader's warnings are
-    issued as Python warnings and kept in ``warnings``.
+    ``max_level`` is the patch table's maximum isolation level; ``smooth_triangles`` selects
+    OpenSubdiv's smooth-triangle rule (as the mesh's ``t smoothtriangles`` tag does). The mesh
+    reader's warnings are issued as Python warnings and kept in ``warnings``.
     """
 
     def __init__(self, path, scheme="catmark", chaikin=False, boundary=None,
-                 max_level=DEFAULT_MAX_LEVEL):
-        self._s = _limitray.Surface(str(path), scheme, bool(chaikin), boundary, int(max_level))
+                 max_level=DEFAULT_MAX_LEVEL, smooth_triangles=False):
+        self._s = _limitray.Surface(str(path), scheme, bool(chaikin), boundary, int(max_level),
+                                    bool(smooth_triangles))
         self.path = str(path)
         for w in self._s.warnings:
             _warnings.warn(w, stacklevel=2)
