@@ -125,9 +125,8 @@ pub fn eval_queries_near(
                     let c = c as usize;
                     let s = rng.next_f64() * EV_DISTANCE;
                     let t = rng.next_f64() * EV_DISTANCE;
-                    let uv = |i: usize| {
-                        (CORNER[c][i] + s * UAX[c][i] + t * VAX[c][i]).clamp(0.0, 1.0)
-                    };
+                    let uv =
+                        |i: usize| (CORNER[c][i] + s * UAX[c][i] + t * VAX[c][i]).clamp(0.0, 1.0);
                     FaceCoord {
                         face,
                         k,

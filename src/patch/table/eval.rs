@@ -1,0 +1,116 @@
+//! Evaluation: the lookup of the leaf holding `(face, k, u, v)` in the quadtree, and the
+//! evaluation of B-spline and single-crease leaves (end caps in `end_cap`).
+
+use super::tree::{descend, Frame, Node};
+use super::{Patch, PatchKind, PatchTable, Sample};
+use crate::coord::FaceCoord;
+use crate::error::{Error, ErrorKind, Result};
+use crate::patch::bspline::{self, ControlGrid, PatchPoint};
+use crate::patch::local::LocalMesh;
+use crate::patch::single_crease;
+
+impl PatchTable {
+    /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
+    pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
+        if face >= self.num_faces() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("face {face} out of range"),
+            ));
+        }
+        if k >= self.sub_faces(face) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "face {face} has {} sub-face(s); k = {k} is out of range",
+                    self.sub_faces(face)
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
+            ));
+        }
+        let mut node = self.roots[self.root_offsets[face] as usize + k] as usize;
+        let mut frame = Frame::UNIT;
+        let (mut s, mut t) = (u, v);
+        loop {
+            match self.nodes[node] {
+                Node::Empty => {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!("face {face} is a hole"),
+                    ));
+                }
+                Node::Inner(c) => {
+                    let (q, s2, t2) = descend(s, t);
+                    frame = frame.child(q);
+                    s = s2;
+                    t = t2;
+                    node = self.children[c as usize][q] as usize;
+                }
+                Node::Leaf(p) => {
+                    let patch = &self.patches[p as usize];
+                    let (pt, extra) = self.eval_patch(patch, s, t);
+                    let pt = frame.face_point(pt);
+                    return Ok(Sample {
+                        p: pt.p,
+                        du: pt.du,
+                        dv: pt.dv,
+                        duu: pt.duu,
+                        duv: pt.duv,
+                        dvv: pt.dvv,
+                        level: patch.level + extra,
+                    });
+                }
+            }
+        }
+    }
+
+    /// Evaluates many samples in parallel.
+    pub fn eval_batch(&self, samples: &[FaceCoord]) -> Vec<Result<Sample>> {
+        use rayon::prelude::*;
+        samples.par_iter().map(|&at| self.eval(at)).collect()
+    }
+
+    fn grid(&self, first: u32) -> ControlGrid {
+        std::array::from_fn(|i| self.points[first as usize + i])
+    }
+
+    /// Evaluates a leaf at local (s, t); returns the point (derivatives in the leaf's (s, t))
+    /// and the number of on-demand levels used.
+    fn eval_patch(&self, patch: &Patch, s: f64, t: f64) -> (PatchPoint, u8) {
+        match patch.kind {
+            PatchKind::BSpline { .. } => (bspline::eval(&self.grid(patch.first_point), s, t), 0),
+            PatchKind::SingleCrease { edge, sharpness } => (
+                single_crease::eval(
+                    &self.grid(patch.first_point),
+                    edge as usize,
+                    sharpness as f64,
+                    s,
+                    t,
+                ),
+                0,
+            ),
+            PatchKind::EndCap => {
+                let cap = &self.end_caps[patch.end_cap as usize];
+                let n = cap.level.num_vertices();
+                let first = cap.first_point as usize;
+                let data: Vec<f64> = self.points[first..first + n]
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect();
+                let mesh = LocalMesh {
+                    level: cap.level.clone(),
+                    data,
+                    width: 3,
+                };
+                self.on_demand(mesh, patch.cap_face as usize, s, t)
+            }
+        }
+    }
+}
