@@ -10,6 +10,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, CreaseMethod, Options};
 use crate::patch::local::{child_face, extract_faces};
 use crate::patch::regular::{classify, RegularKind};
+use crate::patch::stam;
 use crate::refine::stencil::StencilTable;
 use crate::refine::step;
 use crate::refine::Level;
@@ -32,6 +33,7 @@ fn kind_name(kind: PatchKind) -> &'static str {
         PatchKind::BSpline { .. } => "corner",
         PatchKind::SingleCrease { .. } => "single_crease",
         PatchKind::EndCap => "end_cap",
+        PatchKind::Stam { .. } => "stam",
     }
 }
 
@@ -109,6 +111,76 @@ impl PatchTable {
 }
 
 impl PatchTable {
+    /// Settles the faces `caps` of `child` (face, node) that are irregular at the maximum level:
+    /// Stam patches where the configuration allows ([`stam::gather`]), otherwise end caps with
+    /// their own two-ring cut out now, once, for on-demand subdivision at evaluation time.
+    fn settle_caps(&mut self, child: &Level, child_offset: u32, caps: &[(u32, u32)], depth: usize) {
+        // One cut-out holding the two-rings of all caps of this level.
+        let faces: Vec<u32> = caps.iter().map(|c| c.0).collect();
+        let (cut, old, new_faces) = extract_faces(child, &faces, 2);
+        let mut cut_first = None;
+        for (&(_, node), &face) in caps.iter().zip(&new_faces) {
+            let face = face as usize;
+            let found = if self.use_stam {
+                stam::gather(&cut, face)
+            } else {
+                None
+            };
+            if let Some((corner, verts)) = found {
+                let valence = (verts.len() - 8) / 2;
+                if self.stam.len() <= valence {
+                    self.stam.resize(valence + 1, None);
+                }
+                if self.stam[valence].is_none() {
+                    self.stam[valence] = Some(stam::basis(valence));
+                }
+                let first = self.point_stencils.len() as u32;
+                for &v in &verts {
+                    self.point_stencils
+                        .push_terms(&[(child_offset + old[v as usize], 1.0)]);
+                }
+                self.add_leaf(
+                    node,
+                    Patch {
+                        kind: PatchKind::Stam {
+                            valence: valence as u8,
+                            corner: corner as u8,
+                        },
+                        level: depth as u8,
+                        first_point: first,
+                        ..Patch::UNSET
+                    },
+                );
+                continue;
+            }
+            // The cut-out's vertices become control points (once per level), and the cap keeps
+            // its own two-ring of it.
+            let first = *cut_first.get_or_insert_with(|| {
+                let first = self.point_stencils.len() as u32;
+                for &v in &old {
+                    self.point_stencils.push_terms(&[(child_offset + v, 1.0)]);
+                }
+                first
+            });
+            let (level, verts, _) = extract_faces(&cut, &[face as u32], 2);
+            self.end_caps.push(CapMesh {
+                level,
+                points: verts.iter().map(|&v| first + v).collect(),
+            });
+            self.add_leaf(
+                node,
+                Patch {
+                    kind: PatchKind::EndCap,
+                    level: depth as u8,
+                    first_point: first,
+                    end_cap: (self.end_caps.len() - 1) as u32,
+                    cap_face: 0,
+                    ..Patch::UNSET
+                },
+            );
+        }
+    }
+
     /// Builds the patch table of `mesh` with its own options.
     pub fn new(mesh: &ControlMesh, opts: PatchOptions) -> Result<Self> {
         Self::with_options(mesh, mesh.options, opts)
@@ -116,6 +188,17 @@ impl PatchTable {
 
     /// Builds the patch table with subdivision options overriding the mesh's.
     pub fn with_options(mesh: &ControlMesh, options: Options, opts: PatchOptions) -> Result<Self> {
+        Self::build(mesh, options, opts, true)
+    }
+
+    /// [`Self::with_options`], with Stam patches at smooth extraordinary vertices (`stam`) or
+    /// every end cap subdivided on demand (for tests comparing the two).
+    pub(crate) fn build(
+        mesh: &ControlMesh,
+        options: Options,
+        opts: PatchOptions,
+        stam: bool,
+    ) -> Result<Self> {
         if !(1..=MAX_LEVEL).contains(&opts.max_level) {
             return Err(Error::new(
                 ErrorKind::Usage,
@@ -143,6 +226,8 @@ impl PatchTable {
             chain: Vec::new(),
             points: Vec::new(),
             end_caps: Vec::new(),
+            stam: Vec::new(),
+            use_stam: stam,
             method,
             mesh_options: options,
             options: opts,
@@ -208,31 +293,7 @@ impl PatchTable {
                 }
             }
             if !caps.is_empty() {
-                // One cut-out shared by all end caps of this level.
-                let faces: Vec<u32> = caps.iter().map(|c| c.0).collect();
-                let (cut, old, new_faces) = extract_faces(&child, &faces, 2);
-                let first = table.point_stencils.len() as u32;
-                for &v in &old {
-                    table.point_stencils.push_terms(&[(child_offset + v, 1.0)]);
-                }
-                table.end_caps.push(CapMesh {
-                    level: cut,
-                    first_point: first,
-                });
-                let cap = (table.end_caps.len() - 1) as u32;
-                for (&(_, node), &face) in caps.iter().zip(&new_faces) {
-                    table.add_leaf(
-                        node,
-                        Patch {
-                            kind: PatchKind::EndCap,
-                            level: depth as u8,
-                            first_point: first,
-                            end_cap: cap,
-                            cap_face: face,
-                            ..Patch::UNSET
-                        },
-                    );
-                }
+                table.settle_caps(&child, child_offset, &caps, depth);
             }
             level = child;
             pending = next;

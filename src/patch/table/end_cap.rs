@@ -16,24 +16,28 @@ use crate::refine::Level;
 /// to a vertex take that vertex's exact limit position.
 const MAX_ON_DEMAND: usize = 60;
 
-/// A cut-out shared by the end caps of one level: its topology, and its vertices as control
-/// points starting at `first_point`.
+/// The neighbourhood of one end cap, cut out at build time: the two-ring of the cap's face
+/// (face 0, same vertex order) and each vertex's control point in [`PatchTable::points`].
 #[derive(Clone, Debug)]
 pub(super) struct CapMesh {
     pub(super) level: Level,
-    pub(super) first_point: u32,
+    pub(super) points: Vec<u32>,
 }
 
 impl PatchTable {
-    pub(super) fn on_demand(
-        &self,
-        mesh: LocalMesh,
-        g0: usize,
-        s0: f64,
-        t0: f64,
-    ) -> (PatchPoint, u8) {
-        // Work on the face's own two-ring from here on.
-        let mut mesh = LocalMesh::extract(&mesh.level, &mesh.data, 3, g0, 2);
+    /// Evaluates end cap `cap` at its face's (s0, t0) by subdivision on demand; returns the
+    /// point (derivatives in (s0, t0)) and the number of levels subdivided.
+    pub(super) fn on_demand(&self, cap: &CapMesh, s0: f64, t0: f64) -> (PatchPoint, u8) {
+        let data: Vec<f64> = cap
+            .points
+            .iter()
+            .flat_map(|&i| self.points[i as usize])
+            .collect();
+        let mut mesh = LocalMesh {
+            level: cap.level.clone(),
+            data,
+            width: 3,
+        };
         let corner_p = corner_index(s0, t0).map(|q| {
             let v = mesh.level.topo.face_vertices(0)[q] as usize;
             let pos: Vec<[f64; 3]> = mesh

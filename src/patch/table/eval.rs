@@ -1,12 +1,11 @@
 //! Evaluation: the lookup of the leaf holding `(face, k, u, v)` in the quadtree, and the
 //! evaluation of B-spline and single-crease leaves (end caps in `end_cap`).
 
-use super::tree::{descend, Frame, Node};
+use super::tree::{descend, Frame, Node, CORNER, UAX, VAX};
 use super::{Patch, PatchKind, PatchTable, Sample};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::bspline::{self, ControlGrid, PatchPoint};
-use crate::patch::local::LocalMesh;
 use crate::patch::single_crease;
 
 impl PatchTable {
@@ -95,21 +94,25 @@ impl PatchTable {
                 ),
                 0,
             ),
-            PatchKind::EndCap => {
-                let cap = &self.end_caps[patch.end_cap as usize];
-                let n = cap.level.num_vertices();
-                let first = cap.first_point as usize;
-                let data: Vec<f64> = self.points[first..first + n]
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .collect();
-                let mesh = LocalMesh {
-                    level: cap.level.clone(),
-                    data,
-                    width: 3,
+            PatchKind::EndCap => self.on_demand(&self.end_caps[patch.end_cap as usize], s, t),
+            PatchKind::Stam { valence, corner } => {
+                let basis = self.stam[valence as usize]
+                    .as_ref()
+                    .expect("the table holds the matrices of its Stam patches");
+                let first = patch.first_point as usize;
+                let cps = &self.points[first..first + basis.size];
+                // The extraordinary vertex to (0, 0): (s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c].
+                let c = corner as usize;
+                let rot = Frame {
+                    o: CORNER[c],
+                    a: UAX[c],
+                    b: VAX[c],
                 };
-                self.on_demand(mesh, patch.cap_face as usize, s, t)
+                let d = [s - CORNER[c][0], t - CORNER[c][1]];
+                let s1 = (d[0] * UAX[c][0] + d[1] * UAX[c][1]).clamp(0.0, 1.0);
+                let t1 = (d[0] * VAX[c][0] + d[1] * VAX[c][1]).clamp(0.0, 1.0);
+                let (pt, depth) = basis.eval(cps, s1, t1);
+                (rot.face_point(pt), depth)
             }
         }
     }

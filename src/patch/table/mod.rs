@@ -21,7 +21,7 @@
 mod build;
 mod end_cap;
 mod eval;
-mod tree;
+pub(crate) mod tree;
 
 use crate::mesh::{CreaseMethod, Options};
 use crate::refine::stencil::StencilTable;
@@ -71,6 +71,16 @@ pub enum PatchKind {
     },
     /// Irregular at the maximum level: subdivided on demand at evaluation.
     EndCap,
+    /// Irregular at the maximum level, a quad with one smooth extraordinary corner of
+    /// `valence` at its corner `corner` and regular, smooth surroundings: evaluated exactly in
+    /// constant time by Stam's method ([`crate::patch::stam`]) from `2·valence + 8` control
+    /// points.
+    Stam {
+        /// Valence of the extraordinary vertex.
+        valence: u8,
+        /// The patch's corner (0..4, as in the patch's (s, t)) at the extraordinary vertex.
+        corner: u8,
+    },
 }
 
 /// A leaf of the quadtree of one (sub-)face.
@@ -81,11 +91,11 @@ pub struct Patch {
     /// Subdivision level of the patch (0 = base face).
     pub level: u8,
     /// First control point in [`PatchTable::points`] (16 for B-spline and single-crease
-    /// patches, all vertices of the cut-out for end caps).
+    /// patches, `2n + 8` for Stam patches, all vertices of the level's cut-out for end caps).
     pub first_point: u32,
-    /// For end caps: index of the shared cut-out.
+    /// For end caps: index of the cap's own neighbourhood (its two-ring, cut out at build time).
     pub end_cap: u32,
-    /// For end caps: the face within the cut-out.
+    /// For end caps: the face within that neighbourhood (always 0).
     pub cap_face: u32,
     /// Base face.
     pub face: u32,
@@ -147,6 +157,10 @@ pub struct PatchTable {
     /// Control point positions (from the last [`Self::set_positions`]).
     pub points: Vec<[f64; 3]>,
     end_caps: Vec<CapMesh>,
+    /// Stam's matrices by valence (shared, see [`crate::patch::stam::basis`]).
+    stam: Vec<Option<std::sync::Arc<crate::patch::stam::StamBasis>>>,
+    /// Whether Stam patches are made (always, but for tests comparing with end caps).
+    use_stam: bool,
     /// Crease rule.
     pub method: CreaseMethod,
     /// Subdivision options the table was built with (boundary mode, crease rule).
@@ -184,6 +198,7 @@ impl PatchTable {
             .iter()
             .map(|c| {
                 let t = &c.level.topo;
+                let points = 4 * c.points.len();
                 4 * (t.face_offsets.len()
                     + t.face_verts.len()
                     + t.face_edges.len()
@@ -196,6 +211,7 @@ impl PatchTable {
                     + t.vert_edges.len()
                     + c.level.edge_sharpness.len()
                     + c.level.vertex_sharpness.len())
+                    + points
             })
             .sum();
         self.point_stencils.bytes()

@@ -4,7 +4,7 @@
 use crate::patch::bspline::PatchPoint;
 
 #[derive(Clone, Copy, Debug)]
-pub(super) enum Node {
+pub(crate) enum Node {
     Inner(u32),
     Leaf(u32),
     Empty,
@@ -12,24 +12,24 @@ pub(super) enum Node {
 
 /// Frame of a node within its (sub-)face: `(u, v) = o + s a + t b`.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Frame {
-    pub(super) o: [f64; 2],
-    pub(super) a: [f64; 2],
-    pub(super) b: [f64; 2],
+pub(crate) struct Frame {
+    pub(crate) o: [f64; 2],
+    pub(crate) a: [f64; 2],
+    pub(crate) b: [f64; 2],
 }
 
 /// Corner k of the unit square, and the child axes (see `regular::C/U/V`).
-pub(super) const CORNER: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-pub(super) const UAX: [[f64; 2]; 4] = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
-pub(super) const VAX: [[f64; 2]; 4] = [[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]];
+pub(crate) const CORNER: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+pub(crate) const UAX: [[f64; 2]; 4] = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
+pub(crate) const VAX: [[f64; 2]; 4] = [[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]];
 
 impl Frame {
-    pub(super) const UNIT: Frame = Frame {
+    pub(crate) const UNIT: Frame = Frame {
         o: [0.0, 0.0],
         a: [1.0, 0.0],
         b: [0.0, 1.0],
     };
-    pub(super) fn child(&self, k: usize) -> Frame {
+    pub(crate) fn child(&self, k: usize) -> Frame {
         let map = |p: [f64; 2]| {
             [
                 self.a[0] * p[0] + self.b[0] * p[1],
@@ -48,7 +48,7 @@ impl Frame {
     /// First and second derivatives with respect to the (sub-)face's (u, v) from those in
     /// the frame's (s, t). The frame is a rotation and scaling by `h`, so
     /// `s = a·(x − o) / h²` and `t = b·(x − o) / h²`.
-    pub(super) fn face_point(&self, pt: PatchPoint) -> PatchPoint {
+    pub(crate) fn face_point(&self, pt: PatchPoint) -> PatchPoint {
         let (a, b) = (self.a, self.b);
         let h2 = a[0] * a[0] + a[1] * a[1];
         let h4 = h2 * h2;
@@ -72,7 +72,7 @@ impl Frame {
 }
 
 /// Which child of a node holds local point (s, t), and the point in the child's coordinates.
-pub(super) fn descend(s: f64, t: f64) -> (usize, f64, f64) {
+pub(crate) fn descend(s: f64, t: f64) -> (usize, f64, f64) {
     let k = match (s >= 0.5, t >= 0.5) {
         (false, false) => 0,
         (true, false) => 1,
@@ -86,7 +86,7 @@ pub(super) fn descend(s: f64, t: f64) -> (usize, f64, f64) {
 }
 
 /// The corner of the unit square at (s, t), if it is one.
-pub(super) fn corner_index(s: f64, t: f64) -> Option<usize> {
+pub(crate) fn corner_index(s: f64, t: f64) -> Option<usize> {
     match (s, t) {
         (0.0, 0.0) => Some(0),
         (1.0, 0.0) => Some(1),
