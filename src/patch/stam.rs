@@ -45,8 +45,9 @@ pub struct StamBasis {
     pub valence: usize,
     /// Number of control points, `2n + 8`.
     pub size: usize,
-    /// `W[m][q]` for `m = 1..=MAX_DEPTH`, `q = 1..=3`: 16 rows of `size` weights each, at
-    /// `((m − 1)·3 + q − 1)·16·size`.
+    /// `W[m][q]` for `m = 1..=MAX_DEPTH`, `q = 1..=3`, transposed: for each control point
+    /// `i`, its 16 weights (one per patch point), at `((m − 1)·3 + q − 1)·16·size + 16 i`
+    /// (this order lets the product run over 16 independent sums, which vectorise).
     weights: Vec<f64>,
     /// Limit position of the extraordinary vertex as weights over the control points.
     limit: Vec<f64>,
@@ -219,8 +220,10 @@ impl StamBasis {
         let mut next = vec![0.0; size];
         for m in 1..=MAX_DEPTH {
             for rows in &mut cur {
+                for i in 0..size {
+                    weights.extend(rows.iter().map(|r| r[i]));
+                }
                 for r in rows.iter_mut() {
-                    weights.extend_from_slice(r);
                     if m < MAX_DEPTH {
                         next.iter_mut().for_each(|x| *x = 0.0);
                         for (&ri, arow) in r.iter().zip(&a) {
@@ -252,15 +255,15 @@ impl StamBasis {
     fn grid(&self, m: usize, q: usize, cps: &[[f64; 3]]) -> ControlGrid {
         let k = self.size;
         let w = &self.weights[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k];
-        std::array::from_fn(|p| {
-            let mut acc = [0.0; 3];
-            for (&wi, c) in w[p * k..(p + 1) * k].iter().zip(cps) {
-                acc[0] += wi * c[0];
-                acc[1] += wi * c[1];
-                acc[2] += wi * c[2];
+        let (mut x, mut y, mut z) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+        for (wi, c) in w.chunks_exact(16).zip(cps) {
+            for p in 0..16 {
+                x[p] += wi[p] * c[0];
+                y[p] += wi[p] * c[1];
+                z[p] += wi[p] * c[2];
             }
-            acc
-        })
+        }
+        std::array::from_fn(|p| [x[p], y[p], z[p]])
     }
 
     /// Exact limit position of the extraordinary vertex.
@@ -349,13 +352,16 @@ mod tests {
             assert_eq!(b.size, 2 * n + 8);
             // Subdivision reproduces constants: every row of W[m][q] and the limit mask sum
             // to 1 (to rounding accumulated over 60 products of K terms).
-            for row in b.weights.chunks_exact(b.size) {
-                let sum: f64 = row.iter().sum();
-                assert!((sum - 1.0).abs() < 1e-12, "valence {n}: row sums to {sum}");
-                assert!(
-                    row.iter().all(|&w| w > -1e-15),
-                    "valence {n}: negative weight"
-                );
+            for block in b.weights.chunks_exact(16 * b.size) {
+                for p in 0..16 {
+                    let row: Vec<f64> = (0..b.size).map(|i| block[16 * i + p]).collect();
+                    let sum: f64 = row.iter().sum();
+                    assert!((sum - 1.0).abs() < 1e-12, "valence {n}: row sums to {sum}");
+                    assert!(
+                        row.iter().all(|&w| w > -1e-15),
+                        "valence {n}: negative weight"
+                    );
+                }
             }
             assert!((b.limit.iter().sum::<f64>() - 1.0).abs() < 1e-14);
         }
