@@ -3,7 +3,8 @@
 # centre|ev` on scenes/meshes/blob.obj and on generated valence-n stars (n = 3, 5..12: the
 # disc of `limitray::mesh::generate::star(n, 4)`, written here as OBJ), one thread. Prints a
 # markdown table: evaluations per second at face centres and within 2^-10 of an
-# extraordinary corner, and their cost ratio (ev / centre).
+# extraordinary corner, and their cost ratio (ev / centre); each the best of RUNS (default 3)
+# runs.
 #
 # Usage:
 #   bash scripts/bench-ev.sh [LIMITRAY_BINARY] [EV_SAMPLES]
@@ -56,13 +57,20 @@ done
 
 field() { python3 -c "import json,sys; print(json.loads(sys.argv[1])[sys.argv[2]])" "$1" "$2"; }
 
+# Best of RUNS runs (each the median of bench-eval's repetitions), alternating centre and
+# ev runs, so that load from other processes hurts both alike.
+RUNS="${RUNS:-3}"
 echo "| mesh | centre evals/s | ev evals/s | ratio ev/centre |"
 echo "|---|---:|---:|---:|"
 for m in "${MESHES[@]}"; do
-    c="$("$BIN" bench-eval "$m" --threads 1 --near centre --samples 100000)"
-    e="$("$BIN" bench-eval "$m" --threads 1 --near ev --samples "$EV_SAMPLES")"
-    ce="$(field "$c" evals_per_s)"
-    ee="$(field "$e" evals_per_s)"
+    ce=0
+    ee=0
+    for _ in $(seq "$RUNS"); do
+        c="$(field "$("$BIN" bench-eval "$m" --threads 1 --near centre --samples 100000)" evals_per_s)"
+        e="$(field "$("$BIN" bench-eval "$m" --threads 1 --near ev --samples "$EV_SAMPLES")" evals_per_s)"
+        ce="$(python3 -c "print(max($ce, $c))")"
+        ee="$(python3 -c "print(max($ee, $e))")"
+    done
     ratio="$(python3 -c "print(f'{$ce / $ee:.2f}')")"
-    echo "| $(basename "$m" .obj) | $ce | $ee | $ratio |"
+    echo "| $(basename "$m" .obj) | $(printf %.0f "$ce") | $(printf %.0f "$ee") | $ratio |"
 done

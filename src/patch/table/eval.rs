@@ -53,8 +53,11 @@ impl PatchTable {
                 }
                 Node::Leaf(p) => {
                     let patch = &self.patches[p as usize];
-                    let (pt, extra) = self.eval_patch(patch, s, t);
-                    let pt = frame.face_point(pt);
+                    let (pt, local, extra) = self.eval_patch(patch, s, t);
+                    let pt = match local {
+                        Some(l) => frame.then(&l).face_point(pt),
+                        None => frame.face_point(pt),
+                    };
                     return Ok(Sample {
                         p: pt.p,
                         du: pt.du,
@@ -79,11 +82,13 @@ impl PatchTable {
         std::array::from_fn(|i| self.points[first as usize + i])
     }
 
-    /// Evaluates a leaf at local (s, t); returns the point (derivatives in the leaf's (s, t))
-    /// and the number of on-demand levels used.
-    fn eval_patch(&self, patch: &Patch, s: f64, t: f64) -> (PatchPoint, u8) {
+    /// Evaluates a leaf at local (s, t); returns the point (derivatives in the leaf's (s, t),
+    /// or in the frame given within the leaf) and the number of on-demand levels used.
+    fn eval_patch(&self, patch: &Patch, s: f64, t: f64) -> (PatchPoint, Option<Frame>, u8) {
         match patch.kind {
-            PatchKind::BSpline { .. } => (bspline::eval(&self.grid(patch.first_point), s, t), 0),
+            PatchKind::BSpline { .. } => {
+                (bspline::eval(&self.grid(patch.first_point), s, t), None, 0)
+            }
             PatchKind::SingleCrease { edge, sharpness } => (
                 single_crease::eval(
                     &self.grid(patch.first_point),
@@ -92,9 +97,13 @@ impl PatchTable {
                     s,
                     t,
                 ),
+                None,
                 0,
             ),
-            PatchKind::EndCap => self.on_demand(&self.end_caps[patch.end_cap as usize], s, t),
+            PatchKind::EndCap => {
+                let (pt, extra) = self.on_demand(&self.end_caps[patch.end_cap as usize], s, t);
+                (pt, None, extra)
+            }
             PatchKind::Stam { valence, corner } => {
                 let basis = self.stam[valence as usize]
                     .as_ref()
@@ -111,8 +120,8 @@ impl PatchTable {
                 let d = [s - CORNER[c][0], t - CORNER[c][1]];
                 let s1 = (d[0] * UAX[c][0] + d[1] * UAX[c][1]).clamp(0.0, 1.0);
                 let t1 = (d[0] * VAX[c][0] + d[1] * VAX[c][1]).clamp(0.0, 1.0);
-                let (pt, depth) = basis.eval(cps, s1, t1);
-                (rot.face_point(pt), depth)
+                let (pt, sub, depth) = basis.eval_local(cps, s1, t1);
+                (pt, Some(rot.then(&sub)), depth)
             }
         }
     }

@@ -45,6 +45,23 @@ impl Frame {
             b: [va[0] * 0.5, va[1] * 0.5],
         }
     }
+    /// The frame of `inner` (a frame within this one's (s, t)) in this frame's parent:
+    /// `self ∘ inner`.
+    pub(crate) fn then(&self, inner: &Frame) -> Frame {
+        let map = |p: [f64; 2]| {
+            [
+                self.a[0] * p[0] + self.b[0] * p[1],
+                self.a[1] * p[0] + self.b[1] * p[1],
+            ]
+        };
+        let o = map(inner.o);
+        Frame {
+            o: [self.o[0] + o[0], self.o[1] + o[1]],
+            a: map(inner.a),
+            b: map(inner.b),
+        }
+    }
+
     /// First and second derivatives with respect to the (sub-)face's (u, v) from those in
     /// the frame's (s, t). The frame is a rotation and scaling by `h`, so
     /// `s = a·(x − o) / h²` and `t = b·(x − o) / h²`.
