@@ -220,6 +220,7 @@ impl PatchTable {
             nodes: Vec::new(),
             node_info: Vec::new(),
             children: Vec::new(),
+            kids: Vec::new(),
             roots: Vec::new(),
             root_offsets: vec![0],
             point_stencils: StencilTable::new(nb),
@@ -299,6 +300,13 @@ impl PatchTable {
             pending = next;
         }
         table.point_stencils.num_inputs = total as usize;
+        table.kids = table
+            .children
+            .iter()
+            .map(|c| c.map(|n| table.nodes[n as usize]))
+            .collect();
+        table.children = Vec::new();
+        table.node_info = Vec::new();
         table.set_positions(&mesh.positions);
         Ok(table)
     }

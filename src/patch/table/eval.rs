@@ -33,11 +33,11 @@ impl PatchTable {
                 format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
             ));
         }
-        let mut node = self.roots[self.root_offsets[face] as usize + k] as usize;
+        let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
         let mut frame = Frame::UNIT;
         let (mut s, mut t) = (u, v);
         loop {
-            match self.nodes[node] {
+            match node {
                 Node::Empty => {
                     return Err(Error::new(
                         ErrorKind::Usage,
@@ -49,7 +49,7 @@ impl PatchTable {
                     frame = frame.child(q);
                     s = s2;
                     t = t2;
-                    node = self.children[c as usize][q] as usize;
+                    node = self.kids[c as usize][q];
                 }
                 Node::Leaf(p) => {
                     let patch = &self.patches[p as usize];

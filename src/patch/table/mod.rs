@@ -141,10 +141,13 @@ pub struct PatchTable {
     /// Leaf patches.
     pub patches: Vec<Patch>,
     nodes: Vec<Node>,
-    /// Base face, sub-face and domain of each node.
+    /// Base face, sub-face and domain of each node (while building; emptied after).
     node_info: Vec<(u32, u8, Frame)>,
-    /// Inner nodes' children (4 each, in quadrant order).
+    /// Inner nodes' children (4 each, in quadrant order), as node indices while building.
     children: Vec<[u32; 4]>,
+    /// The same children as nodes (`kids[c][q] = nodes[children[c][q]]`), filled at the end of
+    /// the build: the lookup reads one array per level instead of two.
+    kids: Vec<[Node; 4]>,
     /// Root node of sub-face `k` of face `f` at `roots[root_offsets[f] + k]`.
     roots: Vec<u32>,
     root_offsets: Vec<u32>,
@@ -223,7 +226,7 @@ impl PatchTable {
             + self.points.len() * 24
             + self.patches.len() * std::mem::size_of::<Patch>()
             + self.nodes.len() * std::mem::size_of::<Node>()
-            + self.children.len() * 16
+            + self.kids.len() * std::mem::size_of::<[Node; 4]>()
             + self.roots.len() * 4
             + self.root_offsets.len() * 4
             + topo_bytes
