@@ -275,9 +275,9 @@ impl StamBasis {
     }
 
     /// Evaluates the patch of control points `cps` (in [`gather`]'s order) at `(s, t)`, with
-    /// the extraordinary vertex at `(0, 0)` and `s` running towards the configuration's corner
-    /// 1. Returns the point with derivatives in `(s, t)`, and the level of the regular patch
-    /// used (as on-demand subdivision counts it). At `(0, 0)` the position is the exact limit
+    /// the extraordinary vertex at `(0, 0)` and `s` running towards the face's next corner.
+    /// Returns the point with derivatives in `(s, t)`, and the level of the regular patch used
+    /// (as on-demand subdivision counts it). At `(0, 0)` the position is the exact limit
     /// and the derivatives those at `(2^-10, 2^-10)`.
     pub fn eval(&self, cps: &[[f64; 3]], s: f64, t: f64) -> (PatchPoint, u8) {
         let (pt, frame, m) = self.eval_local(cps, s, t);
