@@ -3,7 +3,7 @@
 //! on the union of their two-ring cut-outs, and what is still irregular at the maximum level
 //! becomes an end cap (`end_cap`).
 
-use super::end_cap::CapMesh;
+use super::end_cap::{CapMesh, CapNode};
 use super::tree::{Frame, Node};
 use super::{Patch, PatchKind, PatchOptions, PatchStats, PatchTable, MAX_LEVEL};
 use crate::error::{Error, ErrorKind, Result};
@@ -164,7 +164,7 @@ impl PatchTable {
             });
             let (level, verts, _) = extract_faces(&cut, &[face as u32], 2);
             self.end_caps.push(CapMesh {
-                level,
+                root: CapNode::root(level, self.options.single_crease),
                 points: verts.iter().map(|&v| first + v).collect(),
             });
             self.add_leaf(

@@ -194,13 +194,14 @@ pub struct Sample {
 }
 
 impl PatchTable {
-    /// Bytes used by the table (stencils, patches, tree, end-cap topology).
+    /// Bytes used by the table (stencils, patches, tree, end-cap topology; not the levels that
+    /// end caps refine lazily when queries reach them, nor the shared Stam matrices).
     pub fn bytes(&self) -> usize {
         let topo_bytes: usize = self
             .end_caps
             .iter()
             .map(|c| {
-                let t = &c.level.topo;
+                let t = &c.root.level.topo;
                 let points = 4 * c.points.len();
                 4 * (t.face_offsets.len()
                     + t.face_verts.len()
@@ -212,8 +213,8 @@ impl PatchTable {
                     + 2 * t.vert_faces.len()
                     + t.vert_edge_offsets.len()
                     + t.vert_edges.len()
-                    + c.level.edge_sharpness.len()
-                    + c.level.vertex_sharpness.len())
+                    + c.root.level.edge_sharpness.len()
+                    + c.root.level.vertex_sharpness.len())
                     + points
             })
             .sum();
