@@ -51,6 +51,8 @@ pub struct StamBasis {
     weights: Vec<f64>,
     /// Limit position of the extraordinary vertex as weights over the control points.
     limit: Vec<f64>,
+    /// The configuration's faces over the control points, as [`gather`] visits them.
+    faces: Vec<LocalFace>,
 }
 
 /// Walks the quads around vertex `v`, starting with face `f`, crossing each face's edge that
@@ -107,8 +109,21 @@ fn walk(
 /// unless: `f` is a quad, not a hole; exactly one corner is not an interior vertex of valence
 /// 4, and it is interior, manifold, of valence `3..=MAX_VALENCE`; every face around the
 /// corners is a quad, not a hole; no edge of those faces and none of the gathered vertices
-/// has any sharpness.
+/// has any sharpness; and the faces, written over the gathered vertices, are exactly those of
+/// the canonical configuration of valence `n` (so the neighbourhood is that configuration, not
+/// one with vertices shared in other ways).
 pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
+    let (c, out, faces) = gather_faces(level, f)?;
+    let n = (out.len() - 8) / 2;
+    (faces == basis(n).faces).then_some((c, out))
+}
+
+/// A face of the configuration as positions in the gathered vertices, from the corner walked.
+type LocalFace = [u8; 4];
+
+/// [`gather`] without the comparison with the canonical configuration; also returns the faces
+/// visited (in visiting order) over the gathered vertices.
+fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFace>)> {
     let topo = &level.topo;
     let fv = topo.face_vertices(f);
     if fv.len() != 4 || level.face_hole[f] {
@@ -137,7 +152,7 @@ pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
         let gv = topo.face_vertices(g);
         out.push(gv[(j + 1) % 4]);
         out.push(gv[(j + 2) % 4]);
-        faces.push(g);
+        faces.push((g, j));
     })?;
     for k in 1..4 {
         let w = fv[(c + k) % 4];
@@ -149,13 +164,28 @@ pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
                     out.push(x);
                 }
             }
-            faces.push(g);
+            faces.push((g, j));
         })?;
     }
     if out.len() != 2 * n + 8 {
         return None;
     }
-    let smooth_edges = faces.iter().all(|&g| {
+    let mut sorted = out.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    if sorted.len() != out.len() {
+        return None;
+    }
+    let mut local = Vec::with_capacity(faces.len());
+    for &(g, j) in &faces {
+        let gv = topo.face_vertices(g);
+        let mut lf = [0u8; 4];
+        for (i, x) in lf.iter_mut().enumerate() {
+            *x = out.iter().position(|&y| y == gv[(j + i) % 4])? as u8;
+        }
+        local.push(lf);
+    }
+    let smooth_edges = faces.iter().all(|&(g, _)| {
         topo.face_edge_list(g)
             .iter()
             .all(|&e| level.edge_sharpness[e as usize] == 0.0)
@@ -163,7 +193,7 @@ pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
     let smooth_verts = out
         .iter()
         .all(|&v| level.vertex_sharpness[v as usize] == 0.0);
-    (smooth_edges && smooth_verts).then_some((c, out))
+    (smooth_edges && smooth_verts).then_some((c, out, local))
 }
 
 impl StamBasis {
@@ -176,12 +206,14 @@ impl StamBasis {
         );
         let mesh = generate::star(n, 3);
         let (s0, _) = Level::base(&mesh, &Options::default()).expect("the star mesh is valid");
-        let (c0, g0) = gather(&s0, 0).expect("face 0 of the star is Stam's configuration");
+        let (c0, g0, faces) =
+            gather_faces(&s0, 0).expect("face 0 of the star is Stam's configuration");
         assert_eq!(c0, 0);
         let size = g0.len();
         let (s1, table) = step::refine(&s0, CreaseMethod::Uniform);
-        let (c1, g1) = gather(&s1, child_face(&s0, 0, 0)).expect("so is its corner child");
-        assert_eq!(c1, 0);
+        let (c1, g1, faces1) =
+            gather_faces(&s1, child_face(&s0, 0, 0)).expect("so is its corner child");
+        assert_eq!((c1, &faces1), (0, &faces));
         let col: HashMap<u32, usize> = g0.iter().enumerate().map(|(i, &v)| (v, i)).collect();
         // A child vertex as weights over the parent configuration; everything it reads must be
         // in the configuration (that is what makes it closed under subdivision).
@@ -248,6 +280,7 @@ impl StamBasis {
             size,
             weights,
             limit,
+            faces,
         }
     }
 
