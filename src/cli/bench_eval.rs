@@ -5,7 +5,7 @@
 use super::args::{MeshSource, ThreadArgs};
 use super::bench_refine::{median, ms_since, round4};
 use crate::error::{Error, ErrorKind, Result};
-use crate::harness::eval::{eval_batch, eval_queries};
+use crate::harness::eval::{eval_batch, eval_queries_near, Near};
 use crate::mesh::ControlMesh;
 use crate::patch::{PatchOptions, PatchTable};
 use std::time::Instant;
@@ -26,6 +26,10 @@ pub struct BenchEvalArgs {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Query placement: uniform over the faces, at face centres, or within 2^-10 of an
+    /// extraordinary vertex corner.
+    #[arg(long, value_enum, default_value_t = Near::Uniform)]
+    pub near: Near,
 }
 
 /// Runs `limitray bench-eval`: one JSON line on stdout.
@@ -35,7 +39,7 @@ pub fn run(args: &BenchEvalArgs) -> Result<()> {
         grid: None,
     }
     .load()?;
-    let v = eval_bench(&m, args.samples, args.threads.count(), args.seed)?;
+    let v = eval_bench_near(&m, args.samples, args.threads.count(), args.seed, args.near)?;
     println!("{v}");
     Ok(())
 }
@@ -60,6 +64,18 @@ pub fn eval_bench(
     threads: usize,
     seed: u64,
 ) -> Result<serde_json::Value> {
+    eval_bench_near(mesh, samples, threads, seed, Near::Uniform)
+}
+
+/// [`eval_bench`] with the queries placed by `near` ([`eval_queries_near`]); the JSON also
+/// has `near` (its name).
+pub fn eval_bench_near(
+    mesh: &ControlMesh,
+    samples: usize,
+    threads: usize,
+    seed: u64,
+    near: Near,
+) -> Result<serde_json::Value> {
     let usage = |m: String| Error::new(ErrorKind::Usage, m);
     if samples == 0 {
         return Err(usage("samples must be at least 1".into()));
@@ -76,7 +92,7 @@ pub fn eval_bench(
         },
     )?;
     let build_ms = ms_since(t0);
-    let queries = eval_queries(&table, samples, seed)?;
+    let queries = eval_queries_near(mesh, &table, samples, seed, near)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -105,6 +121,7 @@ pub fn eval_bench(
         "threads": threads,
         "reps": EVAL_REPS,
         "seed": seed,
+        "near": near.name(),
         "patches": table.patches.len(),
         "bytes": table.bytes(),
         "checksum": sum.unwrap_or(0.0),

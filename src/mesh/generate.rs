@@ -71,6 +71,72 @@ pub fn try_grid(n: usize) -> crate::Result<ControlMesh> {
     Ok(grid(n))
 }
 
+/// A disc of quads around one interior vertex of valence `n` (an extraordinary vertex for
+/// `n != 4`): `n` sectors, each an `r` × `r` grid of quads, glued along rays from the centre.
+///
+/// - vertex 0 is the centre; ray `i` (`0 <= i < n`, direction angle `2πi/n`) has vertices
+///   `1 + i r + (d − 1)` at distance `d = 1..=r`; then the inner vertices of each sector;
+/// - sector `i` spans rays `i` and `i + 1`; its quad `(a, b)`, `0 <= a, b < r`, is face
+///   `i r² + a r + b` with corners `(a, b)`, `(a + 1, b)`, `(a + 1, b + 1)`, `(a, b + 1)` in
+///   the sector's coordinates (along ray `i`, along ray `i + 1`); face 0 has the centre at its
+///   corner 0;
+/// - position of sector point `(a, b)`: `a·dᵢ + b·dᵢ₊₁` in the plane, with the height
+///   `0.1·sin(0.7 x)·cos(0.5 y)`; no tags, default options.
+///
+/// Every vertex other than the centre is regular (valence 4 inside, boundary vertices at the
+/// rim). `n` must be at least 3 and `r` at least 1.
+///
+/// ```
+/// let m = limitray::mesh::generate::star(5, 3);
+/// assert_eq!(m.num_faces(), 45);
+/// assert_eq!(m.face(0)[0], 0);
+/// ```
+pub fn star(n: usize, r: usize) -> ControlMesh {
+    assert!(n >= 3 && r >= 1, "star({n}, {r}): needs n >= 3 and r >= 1");
+    let rays = 1 + n * r;
+    let nv = rays + n * r * r;
+    let id = |i: usize, a: usize, b: usize| -> u32 {
+        let v = match (a, b) {
+            (0, 0) => 0,
+            (a, 0) => 1 + i * r + (a - 1),
+            (0, b) => 1 + ((i + 1) % n) * r + (b - 1),
+            (a, b) => rays + i * r * r + (a - 1) * r + (b - 1),
+        };
+        u32::try_from(v).expect("star mesh too large for u32")
+    };
+    let mut positions = vec![[0.0; 3]; nv];
+    let mut face_verts = Vec::with_capacity(4 * n * r * r);
+    for i in 0..n {
+        let angle = |k: usize| std::f64::consts::TAU * (k % n) as f64 / n as f64;
+        let (d0, d1) = (angle(i), angle(i + 1));
+        for a in 0..=r {
+            for b in 0..=r {
+                let (af, bf) = (a as f64, b as f64);
+                let x = af * d0.cos() + bf * d1.cos();
+                let y = af * d0.sin() + bf * d1.sin();
+                positions[id(i, a, b) as usize] = [x, y, 0.1 * (0.7 * x).sin() * (0.5 * y).cos()];
+            }
+        }
+        for a in 0..r {
+            for b in 0..r {
+                face_verts.extend_from_slice(&[
+                    id(i, a, b),
+                    id(i, a + 1, b),
+                    id(i, a + 1, b + 1),
+                    id(i, a, b + 1),
+                ]);
+            }
+        }
+    }
+    let face_offsets = (0..=n * r * r).map(|f| (f * 4) as u32).collect();
+    ControlMesh {
+        positions,
+        face_offsets,
+        face_verts,
+        ..ControlMesh::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,6 +174,26 @@ mod tests {
         // 9 faces -> 36; (3*2+1)^2 = 49 vertices.
         assert_eq!(r.levels[1].num_faces(), 36);
         assert_eq!(r.levels[1].num_vertices(), 49);
+    }
+
+    #[test]
+    fn star_topology() {
+        for n in [3, 5, 12] {
+            let m = star(n, 3);
+            m.validate().unwrap();
+            let (l, _) = crate::refine::Level::base(&m, &m.options).unwrap();
+            let t = &l.topo;
+            assert_eq!(t.vertex_edges(0).len(), n);
+            assert!(!t.vert_tags[0].boundary);
+            for v in 1..m.num_vertices() {
+                let regular = if t.vert_tags[v].boundary {
+                    t.vertex_faces(v).len() <= 2
+                } else {
+                    t.vertex_edges(v).len() == 4
+                };
+                assert!(regular, "vertex {v} of star({n}, 3)");
+            }
+        }
     }
 
     #[test]

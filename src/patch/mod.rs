@@ -1,12 +1,14 @@
 //! Feature-adaptive patches of the limit surface: bicubic B-spline patches ([`bspline`]),
 //! regular patches with one semi-sharp crease ([`single_crease`], paper 000), the recognition
 //! of regular faces ([`regular`]), local neighbourhoods for adaptive refinement ([`local`]) and
-//! the patch table with exact evaluation ([`table`]).
+//! the patch table with exact evaluation ([`table`]), where quads at smooth
+//! extraordinary vertices are evaluated in constant time ([`stam`]).
 
 pub mod bspline;
 pub mod local;
 pub mod regular;
 pub mod single_crease;
+pub mod stam;
 pub mod table;
 
 pub use bspline::{Basis, ControlGrid, Mat4, PatchPoint};

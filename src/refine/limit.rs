@@ -274,7 +274,11 @@ fn combine(ring: &Ring, local: &[f64]) -> Vec<f64> {
 }
 
 /// Position, du and dv masks of vertex `v` as (input vertex, weight) lists.
-fn vertex_limit_masks(level: &Level, v: usize, method: CreaseMethod) -> [Vec<(u32, f64)>; 3] {
+pub(crate) fn vertex_limit_masks(
+    level: &Level,
+    v: usize,
+    method: CreaseMethod,
+) -> [Vec<(u32, f64)>; 3] {
     let topo = &level.topo;
     let edges = topo.vertex_edges(v);
     let tag = topo.vert_tags[v];

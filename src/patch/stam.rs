@@ -1,0 +1,637 @@
+//! Exact evaluation of a quad with one smooth extraordinary corner in constant time (Stam,
+//! SIGGRAPH 1998; paper 004 discusses it).
+//!
+//! A quad whose corner `c` is an interior vertex of valence `n` and whose other corners are
+//! regular, all around it smooth quads (no sharpness, no holes), has a limit surface that
+//! depends only on the `K = 2n + 8` vertices of its one-ring, gathered in a canonical order by
+//! [`gather`]. One subdivision step maps them to the `K` vertices of the same configuration
+//! around the child quad at the extraordinary corner: `C₁ = A C₀` (a `K × K` matrix); the
+//! other three children are regular bicubic B-spline patches, with control points `B_q C₀`
+//! (`q = 1, 2, 3`, `16 × K`). A point with `max(s, t) ∈ [2^-m, 2^-(m-1))` (the extraordinary
+//! corner at `(0, 0)`) lies in child `q` of the `(m−1)`-th descendant at the corner, so its
+//! patch has control points `B_q A^(m-1) C₀`.
+//!
+//! `A` and `B_q` are not typed in: they are the library's own refinement ([`step::refine`],
+//! [`classify`]) of a generated valence-`n` neighbourhood ([`generate::star`]), read off the
+//! stencil rows, so they follow exactly the rules on-demand subdivision uses. Instead of an
+//! eigen-decomposition the products `W[m][q] = B_q A^(m-1)` are tabulated for `m = 1..=`
+//! [`MAX_DEPTH`] once per valence and shared process-wide ([`basis`]); this is exact for every
+//! valence (no defective eigenstructure to worry about) and costs one `16 × K` product per
+//! query. Beyond [`MAX_DEPTH`] levels, and at the corner itself, the corner's exact limit
+//! position applies.
+
+use super::bspline::{self, ControlGrid, PatchPoint};
+use super::local::child_face;
+use super::regular::{classify, RegularKind};
+use super::table::tree::{descend, Frame};
+use crate::mesh::{generate, CreaseMethod, Options};
+use crate::refine::limit::vertex_limit_masks;
+use crate::refine::{step, Level};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Largest valence evaluated by Stam's method; end caps at higher valences are subdivided on
+/// demand.
+pub const MAX_VALENCE: usize = 50;
+
+/// Levels tabulated; points closer than 2^-60 of the patch to the extraordinary corner take
+/// its exact limit position (as on-demand subdivision does).
+pub const MAX_DEPTH: usize = 60;
+
+/// The tabulated matrices of one valence.
+#[derive(Debug)]
+pub struct StamBasis {
+    /// Valence of the extraordinary vertex.
+    pub valence: usize,
+    /// Number of control points, `2n + 8`.
+    pub size: usize,
+    /// `W[m][q]` for `m = 1..=MAX_DEPTH`, `q = 1..=3`, transposed: for each control point
+    /// `i`, its 16 weights (one per patch point), at `((m − 1)·3 + q − 1)·16·size + 16 i`
+    /// (this order lets the product run over 16 independent sums, which vectorise).
+    weights: Vec<f64>,
+    /// Limit position of the extraordinary vertex as weights over the control points.
+    limit: Vec<f64>,
+    /// The configuration's faces over the control points, as [`gather`] visits them.
+    faces: Vec<LocalFace>,
+}
+
+/// Walks the quads around vertex `v`, starting with face `f`, crossing each face's edge that
+/// ends at `v` (the one from the corner before `v`), and calls `visit(face, corner of v)`.
+/// Returns `None` unless the walk meets only quads that are not holes, crosses only manifold,
+/// consistently oriented edges, and comes back to `f` after exactly `count` faces.
+fn walk(
+    level: &Level,
+    v: u32,
+    f: usize,
+    count: usize,
+    mut visit: impl FnMut(usize, usize),
+) -> Option<()> {
+    let topo = &level.topo;
+    let mut g = f;
+    for i in 0..count {
+        if i > 0 && g == f {
+            return None;
+        }
+        let gv = topo.face_vertices(g);
+        if gv.len() != 4 || level.face_hole[g] {
+            return None;
+        }
+        let j = gv.iter().position(|&x| x == v)?;
+        visit(g, j);
+        let e = topo.face_edge_list(g)[(j + 3) % 4];
+        let faces = topo.edge_face_list(e);
+        if faces.len() != 2 || topo.edge_nonmanifold[e as usize] {
+            return None;
+        }
+        let next = if faces[0] as usize == g {
+            faces[1]
+        } else {
+            faces[0]
+        } as usize;
+        // The next face runs the shared edge the other way: v first, then gv[j + 3].
+        let nv = topo.face_vertices(next);
+        let k = nv.iter().position(|&x| x == v)?;
+        if nv.len() != 4 || nv[(k + 1) % 4] != gv[(j + 3) % 4] {
+            return None;
+        }
+        g = next;
+    }
+    (g == f).then_some(())
+}
+
+/// Recognises Stam's configuration at face `f` of `level` and gathers its control points.
+///
+/// Returns the corner `c` of `f` that is extraordinary and the `2n + 8` vertices in canonical
+/// order: the extraordinary vertex; for each face around it, starting with `f` and turning
+/// from `f`'s corner `c + 1` towards `c + 3`, the face's vertex after it and the opposite one;
+/// then the remaining vertices of the faces around corners `c + 1`, `c + 2`, `c + 3` (each
+/// walked from `f` in the same sense, each face's vertices in order from that corner). `None`
+/// unless: `f` is a quad, not a hole; exactly one corner is not an interior vertex of valence
+/// 4, and it is interior, manifold, of valence `3..=MAX_VALENCE`; every face around the
+/// corners is a quad, not a hole; no edge of those faces and none of the gathered vertices
+/// has any sharpness; and the faces, written over the gathered vertices, are exactly those of
+/// the canonical configuration of valence `n` (so the neighbourhood is that configuration, not
+/// one with vertices shared in other ways).
+pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
+    let (c, out, faces) = gather_faces(level, f)?;
+    let n = (out.len() - 8) / 2;
+    (faces == basis(n).faces).then_some((c, out))
+}
+
+/// A face of the configuration as positions in the gathered vertices, from the corner walked.
+type LocalFace = [u8; 4];
+
+/// [`gather`] without the comparison with the canonical configuration; also returns the faces
+/// visited (in visiting order) over the gathered vertices.
+fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFace>)> {
+    let topo = &level.topo;
+    let fv = topo.face_vertices(f);
+    if fv.len() != 4 || level.face_hole[f] {
+        return None;
+    }
+    let interior = |v: u32| {
+        let t = topo.vert_tags[v as usize];
+        !t.boundary && !t.nonmanifold
+    };
+    let valence = |v: u32| topo.vertex_edges(v as usize).len();
+    let irregular: Vec<usize> = (0..4)
+        .filter(|&k| !(interior(fv[k]) && valence(fv[k]) == 4))
+        .collect();
+    let &[c] = irregular.as_slice() else {
+        return None;
+    };
+    let ev = fv[c];
+    let n = valence(ev);
+    if !interior(ev) || !(3..=MAX_VALENCE).contains(&n) || topo.vertex_faces(ev as usize).len() != n
+    {
+        return None;
+    }
+    let mut out = vec![ev];
+    let mut faces = Vec::with_capacity(n + 12);
+    walk(level, ev, f, n, |g, j| {
+        let gv = topo.face_vertices(g);
+        out.push(gv[(j + 1) % 4]);
+        out.push(gv[(j + 2) % 4]);
+        faces.push((g, j));
+    })?;
+    for k in 1..4 {
+        let w = fv[(c + k) % 4];
+        walk(level, w, f, 4, |g, j| {
+            let gv = topo.face_vertices(g);
+            for i in 1..4 {
+                let x = gv[(j + i) % 4];
+                if !out.contains(&x) {
+                    out.push(x);
+                }
+            }
+            faces.push((g, j));
+        })?;
+    }
+    if out.len() != 2 * n + 8 {
+        return None;
+    }
+    let mut sorted = out.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    if sorted.len() != out.len() {
+        return None;
+    }
+    let mut local = Vec::with_capacity(faces.len());
+    for &(g, j) in &faces {
+        let gv = topo.face_vertices(g);
+        let mut lf = [0u8; 4];
+        for (i, x) in lf.iter_mut().enumerate() {
+            *x = out.iter().position(|&y| y == gv[(j + i) % 4])? as u8;
+        }
+        local.push(lf);
+    }
+    let smooth_edges = faces.iter().all(|&(g, _)| {
+        topo.face_edge_list(g)
+            .iter()
+            .all(|&e| level.edge_sharpness[e as usize] == 0.0)
+    });
+    let smooth_verts = out
+        .iter()
+        .all(|&v| level.vertex_sharpness[v as usize] == 0.0);
+    (smooth_edges && smooth_verts).then_some((c, out, local))
+}
+
+impl StamBasis {
+    /// Builds the matrices of valence `n` (3..=[`MAX_VALENCE`]) from the library's refinement of
+    /// [`generate::star`]`(n, 3)`.
+    pub fn new(n: usize) -> Self {
+        assert!(
+            (3..=MAX_VALENCE).contains(&n),
+            "valence {n} outside 3..={MAX_VALENCE}"
+        );
+        let mesh = generate::star(n, 3);
+        let (s0, _) = Level::base(&mesh, &Options::default()).expect("the star mesh is valid");
+        let (c0, g0, faces) =
+            gather_faces(&s0, 0).expect("face 0 of the star is Stam's configuration");
+        assert_eq!(c0, 0);
+        let size = g0.len();
+        let (s1, table) = step::refine(&s0, CreaseMethod::Uniform);
+        let (c1, g1, faces1) =
+            gather_faces(&s1, child_face(&s0, 0, 0)).expect("so is its corner child");
+        assert_eq!((c1, &faces1), (0, &faces));
+        let col: HashMap<u32, usize> = g0.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+        // A child vertex as weights over the parent configuration; everything it reads must be
+        // in the configuration (that is what makes it closed under subdivision).
+        let row_of = |v: u32| -> Vec<f64> {
+            let mut r = vec![0.0; size];
+            let (idx, w) = table.row(v as usize);
+            for (&i, &w) in idx.iter().zip(w) {
+                let j = col
+                    .get(&i)
+                    .expect("the configuration is closed under refinement");
+                r[*j] += w;
+            }
+            r
+        };
+        let a: Vec<Vec<f64>> = g1.iter().map(|&v| row_of(v)).collect();
+        let mut weights = Vec::with_capacity(MAX_DEPTH * 3 * 16 * size);
+        let mut cur: Vec<Vec<Vec<f64>>> = (1..4)
+            .map(|q| {
+                let (kind, cps) = classify(&s1, child_face(&s0, 0, q), false)
+                    .expect("the other children are regular");
+                assert_eq!(kind, RegularKind::BSpline { closed: 0 });
+                cps.iter()
+                    .map(|combo| {
+                        let mut r = vec![0.0; size];
+                        for &(v, w) in combo {
+                            for (x, y) in r.iter_mut().zip(row_of(v)) {
+                                *x += w * y;
+                            }
+                        }
+                        r
+                    })
+                    .collect()
+            })
+            .collect();
+        // Level m needs B_q A^(m-1): store, then multiply by A for the next level.
+        let mut next = vec![0.0; size];
+        for m in 1..=MAX_DEPTH {
+            for rows in &mut cur {
+                for i in 0..size {
+                    weights.extend(rows.iter().map(|r| r[i]));
+                }
+                for r in rows.iter_mut() {
+                    if m < MAX_DEPTH {
+                        next.iter_mut().for_each(|x| *x = 0.0);
+                        for (&ri, arow) in r.iter().zip(&a) {
+                            if ri != 0.0 {
+                                for (x, &aij) in next.iter_mut().zip(arow) {
+                                    *x += ri * aij;
+                                }
+                            }
+                        }
+                        r.copy_from_slice(&next);
+                    }
+                }
+            }
+        }
+        let [pos, _, _] = vertex_limit_masks(&s0, 0, CreaseMethod::Uniform);
+        let mut limit = vec![0.0; size];
+        for (v, w) in pos {
+            limit[*col.get(&v).expect("the limit mask reads the one-ring")] += w;
+        }
+        StamBasis {
+            valence: n,
+            size,
+            weights,
+            limit,
+            faces,
+        }
+    }
+
+    /// The 16 control points of the regular patch `q` (1..=3) at level `m` (1..=MAX_DEPTH).
+    fn grid(&self, m: usize, q: usize, cps: &[[f64; 3]]) -> ControlGrid {
+        let k = self.size;
+        let w = &self.weights[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX (checked just above).
+            return unsafe { grid_avx(w, cps) };
+        }
+        grid_product(w, cps)
+    }
+
+    /// Exact limit position of the extraordinary vertex.
+    pub fn limit(&self, cps: &[[f64; 3]]) -> [f64; 3] {
+        let mut acc = [0.0; 3];
+        for (&wi, c) in self.limit.iter().zip(cps) {
+            acc[0] += wi * c[0];
+            acc[1] += wi * c[1];
+            acc[2] += wi * c[2];
+        }
+        acc
+    }
+
+    /// Evaluates the patch of control points `cps` (in [`gather`]'s order) at `(s, t)`, with
+    /// the extraordinary vertex at `(0, 0)` and `s` running towards the face's next corner.
+    /// Returns the point with derivatives in `(s, t)`, and the level of the regular patch used
+    /// (as on-demand subdivision counts it). At `(0, 0)` the position is the exact limit
+    /// and the derivatives those at `(2^-10, 2^-10)`.
+    pub fn eval(&self, cps: &[[f64; 3]], s: f64, t: f64) -> (PatchPoint, u8) {
+        let (pt, frame, m) = self.eval_local(cps, s, t);
+        (frame.face_point(pt), m)
+    }
+
+    /// [`Self::eval`] with the derivatives left in the regular sub-patch's own parameters,
+    /// and that sub-patch's frame within the patch (so that a caller can compose frames and
+    /// convert derivatives once).
+    pub(crate) fn eval_local(&self, cps: &[[f64; 3]], s: f64, t: f64) -> (PatchPoint, Frame, u8) {
+        debug_assert_eq!(cps.len(), self.size);
+        if s == 0.0 && t == 0.0 {
+            let eps = 2f64.powi(-10);
+            let (mut pt, frame, m) = self.eval_local(cps, eps, eps);
+            pt.p = self.limit(cps);
+            return (pt, frame, m);
+        }
+        let (mut s, mut t) = (s, t);
+        // The (m−1)-th descendant at the corner, in the patch's (s, t).
+        let mut frame = Frame::UNIT;
+        for m in 1..=MAX_DEPTH {
+            let (q, s2, t2) = descend(s, t);
+            if q != 0 {
+                let pt = bspline::eval(&self.grid(m, q, cps), s2, t2);
+                return (pt, frame.child(q), m as u8);
+            }
+            frame = frame.child(0);
+            s = s2;
+            t = t2;
+        }
+        (
+            PatchPoint {
+                p: self.limit(cps),
+                ..Default::default()
+            },
+            frame,
+            MAX_DEPTH as u8,
+        )
+    }
+}
+
+/// `Σ_i cps[i] · w[16 i + p]` for the 16 patch points `p`: 48 independent sums, which the
+/// compiler vectorises (the same operations in the same order on every path, so results do
+/// not depend on the CPU).
+#[inline(always)]
+fn grid_product(w: &[f64], cps: &[[f64; 3]]) -> ControlGrid {
+    let (mut x, mut y, mut z) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+    for (wi, c) in w.chunks_exact(16).zip(cps) {
+        for p in 0..16 {
+            x[p] += wi[p] * c[0];
+            y[p] += wi[p] * c[1];
+            z[p] += wi[p] * c[2];
+        }
+    }
+    std::array::from_fn(|p| [x[p], y[p], z[p]])
+}
+
+/// [`grid_product`] compiled for AVX (four lanes instead of SSE2's two).
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn grid_avx(w: &[f64], cps: &[[f64; 3]]) -> ControlGrid {
+    grid_product(w, cps)
+}
+
+/// The tabulated matrices of valence `n` (3..=[`MAX_VALENCE`]), built on first use and
+/// shared by every table in the process.
+pub fn basis(n: usize) -> Arc<StamBasis> {
+    static CACHE: OnceLock<Mutex<HashMap<usize, Arc<StamBasis>>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(b) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&n) {
+        return b.clone();
+    }
+    // Built outside the lock: two threads may both build it, the first one stored wins.
+    let b = Arc::new(StamBasis::new(n));
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .entry(n)
+        .or_insert(b)
+        .clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::coord::FaceCoord;
+    use crate::harness::rng::SplitMix64;
+    use crate::mesh::{shapes, ControlMesh};
+    use crate::patch::table::{PatchKind, PatchOptions, PatchTable, Sample};
+
+    /// Valences checked: every small one and a few large ones.
+    const VALENCES: [usize; 13] = [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 16, 24, 50];
+
+    #[test]
+    fn basis_is_affine_and_closed() {
+        for n in VALENCES {
+            if n == 4 {
+                continue;
+            }
+            let b = StamBasis::new(n);
+            assert_eq!(b.size, 2 * n + 8);
+            // Subdivision reproduces constants: every row of W[m][q] and the limit mask sum
+            // to 1 (to rounding accumulated over 60 products of K terms).
+            for block in b.weights.chunks_exact(16 * b.size) {
+                for p in 0..16 {
+                    let row: Vec<f64> = (0..b.size).map(|i| block[16 * i + p]).collect();
+                    let sum: f64 = row.iter().sum();
+                    assert!((sum - 1.0).abs() < 1e-12, "valence {n}: row sums to {sum}");
+                    assert!(
+                        row.iter().all(|&w| w > -1e-15),
+                        "valence {n}: negative weight"
+                    );
+                }
+            }
+            assert!((b.limit.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        }
+    }
+
+    /// `star(n, 3)` with jittered positions and each face's vertex list rotated by its index
+    /// (so the extraordinary vertex sits at every corner of some patch).
+    fn jittered_star(n: usize, seed: u64) -> ControlMesh {
+        let mut m = generate::star(n, 3);
+        let mut rng = SplitMix64::new(seed);
+        for p in &mut m.positions {
+            for c in p.iter_mut() {
+                *c += 0.3 * (rng.next_f64() - 0.5);
+            }
+        }
+        for f in 0..m.num_faces() {
+            let (a, b) = (m.face_offsets[f] as usize, m.face_offsets[f + 1] as usize);
+            m.face_verts[a..b].rotate_left(f % 4);
+        }
+        m
+    }
+
+    fn diagonal(m: &ControlMesh) -> f64 {
+        let mut lo = [f64::MAX; 3];
+        let mut hi = [f64::MIN; 3];
+        for p in &m.positions {
+            for c in 0..3 {
+                lo[c] = lo[c].min(p[c]);
+                hi[c] = hi[c].max(p[c]);
+            }
+        }
+        (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt()
+    }
+
+    fn count(table: &PatchTable, stam: bool) -> usize {
+        table
+            .patches
+            .iter()
+            .filter(|p| matches!(p.kind, PatchKind::Stam { .. }) == stam)
+            .count()
+    }
+
+    /// Worst differences (position / diag, first and second derivatives / their tolerance).
+    #[derive(Default, Debug)]
+    struct Worst {
+        p: f64,
+        d1: f64,
+        d2: f64,
+        samples: usize,
+    }
+
+    /// Compares Stam evaluation with on-demand subdivision. Positions agree to 1e-12 of the
+    /// bounding-box diagonal: both are sums of the same control points with weights that are
+    /// products of the same masks, each rounding ~1e-16 relative, over at most 70 levels.
+    /// Derivatives are those of a sub-patch at level `L` (in base-face parameters), i.e. control
+    /// point differences scaled by 2^L (4^L for second derivatives): the same rounding allows
+    /// 1e-12·diag·2^L (4^L), which is also a relative bound wherever the derivative is not
+    /// smaller than that.
+    fn compare(a: &Sample, b: &Sample, diag: f64, w: &mut Worst) {
+        let dist = |x: [f64; 3], y: [f64; 3]| {
+            ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+        };
+        assert_eq!(a.level, b.level, "same sub-patch level");
+        let scale = 2f64.powi(a.level as i32);
+        let e = dist(a.p, b.p) / diag;
+        let e1 = dist(a.du, b.du).max(dist(a.dv, b.dv)) / (diag * scale);
+        let e2 = dist(a.duu, b.duu)
+            .max(dist(a.duv, b.duv))
+            .max(dist(a.dvv, b.dvv))
+            / (diag * scale * scale);
+        assert!(e <= 1e-12, "position differs by {e:.2e} of the diagonal");
+        assert!(e1 <= 1e-12, "first derivatives differ by {e1:.2e} (scaled)");
+        assert!(
+            e2 <= 1e-12,
+            "second derivatives differ by {e2:.2e} (scaled)"
+        );
+        w.p = w.p.max(e);
+        w.d1 = w.d1.max(e1);
+        w.d2 = w.d2.max(e2);
+        w.samples += 1;
+    }
+
+    /// Random points of face `f` near its corner `c`: at distance 2^-k, k up to 70.
+    fn near_corner(rng: &mut SplitMix64, f: u32, c: usize) -> FaceCoord {
+        const CORNER: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let k = rng.below(71) as i32;
+        let r = 2f64.powi(-k);
+        let (s, t) = match rng.below(8) {
+            0 => (0.0, 0.0),
+            1 => (r, 0.0),
+            2 => (0.0, r),
+            _ => (r * rng.next_f64(), r * rng.next_f64()),
+        };
+        const UAX: [[f64; 2]; 4] = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
+        const VAX: [[f64; 2]; 4] = [[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]];
+        let at = |i: usize| CORNER[c][i] + s * UAX[c][i] + t * VAX[c][i];
+        FaceCoord::quad(f, at(0).clamp(0.0, 1.0), at(1).clamp(0.0, 1.0))
+    }
+
+    #[test]
+    fn stam_equals_on_demand_on_stars() {
+        let mut worst = Worst::default();
+        for n in VALENCES {
+            let mesh = jittered_star(n, n as u64);
+            let diag = diagonal(&mesh);
+            let opts = PatchOptions::default();
+            let stam = PatchTable::build(&mesh, mesh.options, opts, true).unwrap();
+            let cap = PatchTable::build(&mesh, mesh.options, opts, false).unwrap();
+            assert_eq!(count(&cap, true), 0);
+            if n == 4 {
+                assert_eq!(count(&stam, true), 0, "valence 4 is regular");
+                continue;
+            }
+            // One cap per face at the centre, at the maximum level.
+            assert_eq!(count(&stam, true), n, "valence {n}: Stam patches");
+            assert_eq!(
+                count(&stam, true) + count(&stam, false),
+                count(&cap, false),
+                "same leaves"
+            );
+            let mut rng = SplitMix64::new(1000 + n as u64);
+            for i in 0..n {
+                // Sector i's face at the centre, corner (i·9) % 4 after the rotation.
+                let f = (i * 9) as u32;
+                let c = (4 - (f as usize % 4)) % 4;
+                for _ in 0..60 {
+                    let q = near_corner(&mut rng, f, c);
+                    let (a, b) = (stam.eval(q).unwrap(), cap.eval(q).unwrap());
+                    compare(&a, &b, diag, &mut worst);
+                }
+            }
+        }
+        eprintln!("stars: {worst:?}");
+    }
+
+    #[test]
+    fn stam_equals_on_demand_on_the_blob_and_after_reposing() {
+        let mesh = shapes::blob();
+        let opts = PatchOptions::default();
+        let mut stam = PatchTable::build(&mesh, mesh.options, opts, true).unwrap();
+        let mut cap = PatchTable::build(&mesh, mesh.options, opts, false).unwrap();
+        assert!(count(&stam, true) > 0);
+        // Only smooth valence-3, 5 and 6 corners: every end cap is a Stam patch.
+        assert_eq!(count(&stam, false) + count(&stam, true), stam.patches.len());
+        assert!(!stam
+            .patches
+            .iter()
+            .any(|p| matches!(p.kind, PatchKind::EndCap)));
+        let corners = crate::harness::eval::extraordinary_corners(&mesh, &stam).unwrap();
+        let mut rng = SplitMix64::new(7);
+        let mut positions = mesh.positions.clone();
+        for pass in 0..2 {
+            let diag = diagonal(&ControlMesh {
+                positions: positions.clone(),
+                ..ControlMesh::default()
+            });
+            let mut worst = Worst::default();
+            for _ in 0..3000 {
+                let (f, k, c) = corners[rng.below(corners.len())];
+                let mut q = near_corner(&mut rng, f, c as usize);
+                q.k = k;
+                compare(
+                    &stam.eval(q).unwrap(),
+                    &cap.eval(q).unwrap(),
+                    diag,
+                    &mut worst,
+                );
+            }
+            eprintln!("blob pass {pass}: {worst:?}");
+            // Re-pose: the Stam control points follow their stencils.
+            for p in &mut positions {
+                p[2] += 0.2 * p[0].sin();
+            }
+            stam.set_positions(&positions);
+            cap.set_positions(&positions);
+        }
+    }
+
+    #[test]
+    fn sharpness_or_boundary_falls_back_to_end_caps() {
+        // An infinitely sharp edge at the centre (a dart): it is in every centre face's
+        // one-ring. (A semi-sharp one has decayed to 0 by the maximum level.)
+        let mut mesh = generate::star(5, 3);
+        mesh.creases.push(crate::mesh::EdgeCrease {
+            v0: 0,
+            v1: 1,
+            sharpness: crate::mesh::SHARPNESS_INFINITE,
+        });
+        let t = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        assert_eq!(
+            count(&t, true),
+            0,
+            "the crease is in every centre face's one-ring"
+        );
+        // A valence-5 vertex on the boundary: the star's rim vertex would be regular; use a
+        // star with one sector removed (the centre becomes a boundary vertex of valence 5).
+        let mut m = generate::star(6, 2);
+        m.face_offsets.truncate(m.face_offsets.len() - 4);
+        m.face_verts.truncate(m.face_verts.len() - 16);
+        let t = PatchTable::new(&m, PatchOptions::default()).unwrap();
+        assert_eq!(count(&t, true), 0);
+        // Too high a valence.
+        let t =
+            PatchTable::new(&generate::star(MAX_VALENCE + 1, 2), PatchOptions::default()).unwrap();
+        assert_eq!(count(&t, true), 0);
+        assert!(t.patches.iter().any(|p| p.kind == PatchKind::EndCap));
+    }
+}

@@ -1,0 +1,326 @@
+//! The factory of a patch table: every base face (every sub-face of an n-gon) becomes the root
+//! of a quadtree; regular faces become leaf patches, irregular ones are refined level by level
+//! on the union of their two-ring cut-outs, and what is still irregular at the maximum level
+//! becomes an end cap (`end_cap`).
+
+use super::end_cap::{CapMesh, CapNode};
+use super::tree::{Frame, Node};
+use super::{Patch, PatchKind, PatchOptions, PatchStats, PatchTable, MAX_LEVEL};
+use crate::error::{Error, ErrorKind, Result};
+use crate::mesh::{ControlMesh, CreaseMethod, Options};
+use crate::patch::local::{child_face, extract_faces};
+use crate::patch::regular::{classify, RegularKind};
+use crate::patch::stam;
+use crate::refine::stencil::StencilTable;
+use crate::refine::step;
+use crate::refine::Level;
+
+/// A face waiting for refinement at the current level, and where its subtree goes.
+#[derive(Clone, Copy, Debug)]
+enum Slot {
+    /// A quad (or sub-face): its node.
+    Quad(u32),
+    /// An n-gon of the control mesh: the roots of its `n` sub-faces, consecutive nodes.
+    NGon(u32, u32),
+    /// Irregular at the maximum level: becomes an end cap (node).
+    Cap(u32),
+}
+
+fn kind_name(kind: PatchKind) -> &'static str {
+    match kind {
+        PatchKind::BSpline { closed: 0 } => "regular",
+        PatchKind::BSpline { closed: 1 } => "boundary",
+        PatchKind::BSpline { .. } => "corner",
+        PatchKind::SingleCrease { .. } => "single_crease",
+        PatchKind::EndCap => "end_cap",
+        PatchKind::Stam { .. } => "stam",
+    }
+}
+
+fn patch_kind(kind: RegularKind) -> PatchKind {
+    match kind {
+        RegularKind::BSpline { closed } => PatchKind::BSpline { closed },
+        RegularKind::SingleCrease { edge, sharpness } => {
+            PatchKind::SingleCrease { edge, sharpness }
+        }
+    }
+}
+
+impl PatchTable {
+    fn add_leaf(&mut self, slot: u32, mut patch: Patch) {
+        let (face, sub, fr) = self.node_info[slot as usize];
+        patch.face = face;
+        patch.sub_face = sub;
+        patch.origin = fr.o;
+        patch.axis_u = fr.a;
+        patch.axis_v = fr.b;
+        *self
+            .stats
+            .by_kind_level
+            .entry((kind_name(patch.kind).to_string(), patch.level))
+            .or_default() += 1;
+        self.patches.push(patch);
+        self.nodes[slot as usize] = Node::Leaf((self.patches.len() - 1) as u32);
+    }
+
+    fn new_node(&mut self, face: u32, sub: u8, frame: Frame) -> u32 {
+        self.node_info.push((face, sub, frame));
+        self.nodes.push(Node::Empty);
+        (self.nodes.len() - 1) as u32
+    }
+
+    /// Settles face `g` of `level` (whose vertices are `rows` over the base vertices) into
+    /// node `slot`: a hole, a regular patch, an end cap at the maximum level, or a face to
+    /// refine further (returned).
+    fn settle(
+        &mut self,
+        level: &Level,
+        offset: u32,
+        g: usize,
+        slot: u32,
+        depth: usize,
+    ) -> Option<(u32, Slot)> {
+        if level.face_hole[g] {
+            self.nodes[slot as usize] = Node::Empty;
+            return None;
+        }
+        if let Some((kind, cps)) = classify(level, g, self.options.single_crease) {
+            let first = self.point_stencils.len() as u32;
+            for c in &cps {
+                let terms: Vec<(u32, f64)> = c.iter().map(|&(v, w)| (offset + v, w)).collect();
+                self.point_stencils.push_terms(&terms);
+            }
+            self.add_leaf(
+                slot,
+                Patch {
+                    kind: patch_kind(kind),
+                    level: depth as u8,
+                    first_point: first,
+                    end_cap: 0,
+                    cap_face: 0,
+                    ..Patch::UNSET
+                },
+            );
+            return None;
+        }
+        if depth >= self.options.max_level {
+            return Some((g as u32, Slot::Cap(slot)));
+        }
+        Some((g as u32, Slot::Quad(slot)))
+    }
+}
+
+impl PatchTable {
+    /// Settles the faces `caps` of `child` (face, node) that are irregular at the maximum level:
+    /// Stam patches where the configuration allows ([`stam::gather`]), otherwise end caps with
+    /// their own two-ring cut out now, once, for on-demand subdivision at evaluation time.
+    fn settle_caps(&mut self, child: &Level, child_offset: u32, caps: &[(u32, u32)], depth: usize) {
+        // One cut-out holding the two-rings of all caps of this level.
+        let faces: Vec<u32> = caps.iter().map(|c| c.0).collect();
+        let (cut, old, new_faces) = extract_faces(child, &faces, 2);
+        let mut cut_first = None;
+        for (&(_, node), &face) in caps.iter().zip(&new_faces) {
+            let face = face as usize;
+            let found = if self.use_stam {
+                stam::gather(&cut, face)
+            } else {
+                None
+            };
+            if let Some((corner, verts)) = found {
+                let valence = (verts.len() - 8) / 2;
+                if self.stam.len() <= valence {
+                    self.stam.resize(valence + 1, None);
+                }
+                if self.stam[valence].is_none() {
+                    self.stam[valence] = Some(stam::basis(valence));
+                }
+                let first = self.point_stencils.len() as u32;
+                for &v in &verts {
+                    self.point_stencils
+                        .push_terms(&[(child_offset + old[v as usize], 1.0)]);
+                }
+                self.add_leaf(
+                    node,
+                    Patch {
+                        kind: PatchKind::Stam {
+                            valence: valence as u8,
+                            corner: corner as u8,
+                        },
+                        level: depth as u8,
+                        first_point: first,
+                        ..Patch::UNSET
+                    },
+                );
+                continue;
+            }
+            // The cut-out's vertices become control points (once per level), and the cap keeps
+            // its own two-ring of it.
+            let first = *cut_first.get_or_insert_with(|| {
+                let first = self.point_stencils.len() as u32;
+                for &v in &old {
+                    self.point_stencils.push_terms(&[(child_offset + v, 1.0)]);
+                }
+                first
+            });
+            let (level, verts, _) = extract_faces(&cut, &[face as u32], 2);
+            self.end_caps.push(CapMesh {
+                root: CapNode::root(level, self.options.single_crease),
+                points: verts.iter().map(|&v| first + v).collect(),
+            });
+            self.add_leaf(
+                node,
+                Patch {
+                    kind: PatchKind::EndCap,
+                    level: depth as u8,
+                    first_point: first,
+                    end_cap: (self.end_caps.len() - 1) as u32,
+                    cap_face: 0,
+                    ..Patch::UNSET
+                },
+            );
+        }
+    }
+
+    /// Builds the patch table of `mesh` with its own options.
+    pub fn new(mesh: &ControlMesh, opts: PatchOptions) -> Result<Self> {
+        Self::with_options(mesh, mesh.options, opts)
+    }
+
+    /// Builds the patch table with subdivision options overriding the mesh's.
+    pub fn with_options(mesh: &ControlMesh, options: Options, opts: PatchOptions) -> Result<Self> {
+        Self::build(mesh, options, opts, true)
+    }
+
+    /// [`Self::with_options`], with Stam patches at smooth extraordinary vertices (`stam`) or
+    /// every end cap subdivided on demand (for tests comparing the two).
+    pub(crate) fn build(
+        mesh: &ControlMesh,
+        options: Options,
+        opts: PatchOptions,
+        stam: bool,
+    ) -> Result<Self> {
+        if !(1..=MAX_LEVEL).contains(&opts.max_level) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "maximum isolation level {} is outside 1..={MAX_LEVEL}",
+                    opts.max_level
+                ),
+            ));
+        }
+        let (base, _) = Level::base(mesh, &options)?;
+        let method = options.crease_method;
+        let opts = PatchOptions {
+            single_crease: opts.single_crease && method == CreaseMethod::Uniform,
+            max_level: opts.max_level.max(1),
+        };
+        let nb = base.num_vertices();
+        let mut table = PatchTable {
+            patches: Vec::new(),
+            nodes: Vec::new(),
+            node_info: Vec::new(),
+            children: Vec::new(),
+            kids: Vec::new(),
+            roots: Vec::new(),
+            root_offsets: vec![0],
+            point_stencils: StencilTable::new(nb),
+            chain: Vec::new(),
+            points: Vec::new(),
+            end_caps: Vec::new(),
+            stam: Vec::new(),
+            use_stam: stam,
+            method,
+            mesh_options: options,
+            options: opts,
+            stats: PatchStats::default(),
+        };
+        let mut pending: Vec<(u32, Slot)> = Vec::new();
+        for f in 0..base.num_faces() {
+            let n = base.topo.face_size(f);
+            if n == 4 {
+                let slot = table.new_node(f as u32, 0, Frame::UNIT);
+                table.roots.push(slot);
+                if let Some(p) = table.settle(&base, 0, f, slot, 0) {
+                    pending.push(p);
+                }
+            } else {
+                let first = table.nodes.len() as u32;
+                for k in 0..n {
+                    let slot = table.new_node(f as u32, k as u8, Frame::UNIT);
+                    table.roots.push(slot);
+                }
+                if !base.face_hole[f] {
+                    pending.push((f as u32, Slot::NGon(first, n as u32)));
+                }
+            }
+            table.root_offsets.push(table.roots.len() as u32);
+        }
+        // Refine what is irregular, level by level, on the union of two-ring neighbourhoods.
+        let mut level = base;
+        let mut total = nb as u32;
+        let mut depth = 0;
+        while !pending.is_empty() {
+            let seeds: Vec<u32> = pending.iter().map(|p| p.0).collect();
+            let (sub, old, seed_new) = extract_faces(&level, &seeds, 2);
+            let (child, t) = step::refine(&sub, method);
+            table.chain.push((old, t));
+            let child_offset = total;
+            total += child.num_vertices() as u32;
+            table.stats.refined_vertices += child.num_vertices();
+            depth += 1;
+            let mut next = Vec::new();
+            let mut caps = Vec::new();
+            for (&(_, slot), &g) in pending.iter().zip(&seed_new) {
+                let g = g as usize;
+                let slots: Vec<u32> = match slot {
+                    Slot::Cap(_) => unreachable!("end caps are settled at their level"),
+                    Slot::NGon(first, n) => (first..first + n).collect(),
+                    Slot::Quad(node) => {
+                        let (face, sub, fr) = table.node_info[node as usize];
+                        let kids: [u32; 4] =
+                            std::array::from_fn(|q| table.new_node(face, sub, fr.child(q)));
+                        table.children.push(kids);
+                        table.nodes[node as usize] = Node::Inner((table.children.len() - 1) as u32);
+                        kids.to_vec()
+                    }
+                };
+                for (k, &s) in slots.iter().enumerate() {
+                    let c = child_face(&sub, g, k);
+                    match table.settle(&child, child_offset, c, s, depth) {
+                        Some((c, Slot::Cap(node))) => caps.push((c, node)),
+                        Some(p) => next.push(p),
+                        None => {}
+                    }
+                }
+            }
+            if !caps.is_empty() {
+                table.settle_caps(&child, child_offset, &caps, depth);
+            }
+            level = child;
+            pending = next;
+        }
+        table.point_stencils.num_inputs = total as usize;
+        table.kids = table
+            .children
+            .iter()
+            .map(|c| c.map(|n| table.nodes[n as usize]))
+            .collect();
+        table.children = Vec::new();
+        table.node_info = Vec::new();
+        table.set_positions(&mesh.positions);
+        Ok(table)
+    }
+
+    /// Re-poses the table: new control positions, same topology.
+    pub fn set_positions(&mut self, base: &[[f64; 3]]) {
+        let mut all: Vec<[f64; 3]> = base.to_vec();
+        let mut start = 0;
+        for (select, t) in &self.chain {
+            let sub: Vec<[f64; 3]> = select.iter().map(|&i| all[start + i as usize]).collect();
+            let child = t.apply_points(&sub);
+            start = all.len();
+            all.extend_from_slice(&child);
+        }
+        self.points = self.point_stencils.apply_points(&all);
+    }
+}

@@ -1,0 +1,128 @@
+//! Evaluation: the lookup of the leaf holding `(face, k, u, v)` in the quadtree, and the
+//! evaluation of B-spline and single-crease leaves (end caps in `end_cap`).
+
+use super::tree::{descend, Frame, Node, CORNER, UAX, VAX};
+use super::{Patch, PatchKind, PatchTable, Sample};
+use crate::coord::FaceCoord;
+use crate::error::{Error, ErrorKind, Result};
+use crate::patch::bspline::{self, ControlGrid, PatchPoint};
+use crate::patch::single_crease;
+
+impl PatchTable {
+    /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
+    pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
+        if face >= self.num_faces() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("face {face} out of range"),
+            ));
+        }
+        if k >= self.sub_faces(face) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "face {face} has {} sub-face(s); k = {k} is out of range",
+                    self.sub_faces(face)
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
+            ));
+        }
+        let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
+        let mut frame = Frame::UNIT;
+        let (mut s, mut t) = (u, v);
+        loop {
+            match node {
+                Node::Empty => {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!("face {face} is a hole"),
+                    ));
+                }
+                Node::Inner(c) => {
+                    let (q, s2, t2) = descend(s, t);
+                    frame = frame.child(q);
+                    s = s2;
+                    t = t2;
+                    node = self.kids[c as usize][q];
+                }
+                Node::Leaf(p) => {
+                    let patch = &self.patches[p as usize];
+                    let (pt, local, extra) = self.eval_patch(patch, s, t);
+                    let pt = match local {
+                        Some(l) => frame.then(&l).face_point(pt),
+                        None => frame.face_point(pt),
+                    };
+                    return Ok(Sample {
+                        p: pt.p,
+                        du: pt.du,
+                        dv: pt.dv,
+                        duu: pt.duu,
+                        duv: pt.duv,
+                        dvv: pt.dvv,
+                        level: patch.level + extra,
+                    });
+                }
+            }
+        }
+    }
+
+    /// Evaluates many samples in parallel.
+    pub fn eval_batch(&self, samples: &[FaceCoord]) -> Vec<Result<Sample>> {
+        use rayon::prelude::*;
+        samples.par_iter().map(|&at| self.eval(at)).collect()
+    }
+
+    fn grid(&self, first: u32) -> ControlGrid {
+        std::array::from_fn(|i| self.points[first as usize + i])
+    }
+
+    /// Evaluates a leaf at local (s, t); returns the point (derivatives in the leaf's (s, t),
+    /// or in the frame given within the leaf) and the number of on-demand levels used.
+    fn eval_patch(&self, patch: &Patch, s: f64, t: f64) -> (PatchPoint, Option<Frame>, u8) {
+        match patch.kind {
+            PatchKind::BSpline { .. } => {
+                (bspline::eval(&self.grid(patch.first_point), s, t), None, 0)
+            }
+            PatchKind::SingleCrease { edge, sharpness } => (
+                single_crease::eval(
+                    &self.grid(patch.first_point),
+                    edge as usize,
+                    sharpness as f64,
+                    s,
+                    t,
+                ),
+                None,
+                0,
+            ),
+            PatchKind::EndCap => {
+                let (pt, extra) = self.on_demand(&self.end_caps[patch.end_cap as usize], s, t);
+                (pt, None, extra)
+            }
+            PatchKind::Stam { valence, corner } => {
+                let basis = self.stam[valence as usize]
+                    .as_ref()
+                    .expect("the table holds the matrices of its Stam patches");
+                let first = patch.first_point as usize;
+                let cps = &self.points[first..first + basis.size];
+                // The extraordinary vertex to (0, 0): (s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c].
+                let c = corner as usize;
+                let rot = Frame {
+                    o: CORNER[c],
+                    a: UAX[c],
+                    b: VAX[c],
+                };
+                let d = [s - CORNER[c][0], t - CORNER[c][1]];
+                let s1 = (d[0] * UAX[c][0] + d[1] * UAX[c][1]).clamp(0.0, 1.0);
+                let t1 = (d[0] * VAX[c][0] + d[1] * VAX[c][1]).clamp(0.0, 1.0);
+                let (pt, sub, depth) = basis.eval_local(cps, s1, t1);
+                (pt, Some(rot.then(&sub)), depth)
+            }
+        }
+    }
+}

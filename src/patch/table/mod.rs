@@ -1,0 +1,245 @@
+//! The feature-adaptive patch table (paper 001 §3.3–4, paper 000) and exact evaluation of the
+//! limit surface at any `(face, k, u, v)`.
+//!
+//! Every base face (every sub-face of an n-gon, after one step) is the root of a quadtree.
+//! A node whose face is regular becomes a leaf patch: a bicubic B-spline (interior, boundary
+//! and corner patches, infinitely sharp creases acting as boundaries) or a single-crease patch
+//! evaluated directly (paper 000). Irregular faces are refined, locally, on a two-ring cut-out
+//! ([`super::local`]), down to the maximum isolation level. What is still irregular there
+//! (faces at extraordinary vertices, darts, sharpness beyond the level) becomes an end cap:
+//! this library's end cap is not an approximation but the cut-out itself, subdivided further on
+//! demand at evaluation time until the point falls in a regular sub-patch, or lands exactly on
+//! a vertex, whose exact limit mask then applies. Evaluation is therefore exact everywhere.
+//!
+//! Topology analysis depends only on connectivity and tags: the table keeps every control
+//! point as a stencil over the base vertices, so [`PatchTable::set_positions`] re-poses it.
+//!
+//! The module is split by concept: `tree` (the quadtree of nodes and their frames),
+//! `build` (the factory: classification and local refinement), `eval` (the lookup and
+//! evaluation of leaves) and `end_cap` (end caps and their on-demand subdivision).
+
+mod build;
+mod end_cap;
+mod eval;
+pub(crate) mod tree;
+
+use crate::mesh::{CreaseMethod, Options};
+use crate::refine::stencil::StencilTable;
+use end_cap::CapMesh;
+use tree::{Frame, Node};
+
+/// Default maximum isolation level.
+pub const DEFAULT_MAX_LEVEL: usize = 10;
+
+/// Largest maximum isolation level accepted (by the library, the scene key `max_level` and
+/// the command line's `--max-level` alike); patch levels are stored in a byte.
+pub const MAX_LEVEL: usize = 16;
+
+/// Options of the patch table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchOptions {
+    /// Maximum isolation level.
+    pub max_level: usize,
+    /// Use single-crease patches (paper 000) for regular faces with one semi-sharp crease
+    /// (uniform crease rule only); otherwise such faces are refined like other features.
+    pub single_crease: bool,
+}
+
+impl Default for PatchOptions {
+    fn default() -> Self {
+        PatchOptions {
+            max_level: DEFAULT_MAX_LEVEL,
+            single_crease: true,
+        }
+    }
+}
+
+/// The kind of a leaf patch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PatchKind {
+    /// Bicubic B-spline with `closed` boundary (or infinitely sharp) edges.
+    BSpline {
+        /// Number of closed edges: 0 regular interior, 1 boundary, 2 corner.
+        closed: u8,
+    },
+    /// Regular patch with one semi-sharp crease on edge `edge`.
+    SingleCrease {
+        /// Face edge with the crease.
+        edge: u8,
+        /// Sharpness.
+        sharpness: f32,
+    },
+    /// Irregular at the maximum level: subdivided on demand at evaluation.
+    EndCap,
+    /// Irregular at the maximum level, a quad with one smooth extraordinary corner of
+    /// `valence` at its corner `corner` and regular, smooth surroundings: evaluated exactly in
+    /// constant time by Stam's method ([`crate::patch::stam`]) from `2·valence + 8` control
+    /// points.
+    Stam {
+        /// Valence of the extraordinary vertex.
+        valence: u8,
+        /// The patch's corner (0..4, as in the patch's (s, t)) at the extraordinary vertex.
+        corner: u8,
+    },
+}
+
+/// A leaf of the quadtree of one (sub-)face.
+#[derive(Clone, Debug)]
+pub struct Patch {
+    /// Kind.
+    pub kind: PatchKind,
+    /// Subdivision level of the patch (0 = base face).
+    pub level: u8,
+    /// First control point in [`PatchTable::points`] (16 for B-spline and single-crease
+    /// patches, `2n + 8` for Stam patches, all vertices of the level's cut-out for end caps).
+    pub first_point: u32,
+    /// For end caps: index of the cap's own neighbourhood (its two-ring, cut out at build time).
+    pub end_cap: u32,
+    /// For end caps: the face within that neighbourhood (always 0).
+    pub cap_face: u32,
+    /// Base face.
+    pub face: u32,
+    /// Sub-face of the base face (0 for quads).
+    pub sub_face: u8,
+    /// Domain in the (sub-)face's parameters: `(u, v) = origin + s·axis_u + t·axis_v` for the
+    /// patch's own `(s, t) ∈ [0, 1]²`.
+    pub origin: [f64; 2],
+    /// See `origin`.
+    pub axis_u: [f64; 2],
+    /// See `origin`.
+    pub axis_v: [f64; 2],
+}
+
+impl Patch {
+    /// Placeholder for the fields filled in when a patch is attached to its node.
+    const UNSET: Patch = Patch {
+        kind: PatchKind::EndCap,
+        level: 0,
+        first_point: 0,
+        end_cap: 0,
+        cap_face: 0,
+        face: 0,
+        sub_face: 0,
+        origin: [0.0; 2],
+        axis_u: [1.0, 0.0],
+        axis_v: [0.0, 1.0],
+    };
+}
+
+/// Counts for `limitray stats`.
+#[derive(Clone, Debug, Default)]
+pub struct PatchStats {
+    /// Patches per (kind name, level).
+    pub by_kind_level: std::collections::BTreeMap<(String, u8), usize>,
+    /// Vertices created by local refinement while building.
+    pub refined_vertices: usize,
+}
+
+/// The patch table of a control mesh.
+#[derive(Clone, Debug)]
+pub struct PatchTable {
+    /// Leaf patches.
+    pub patches: Vec<Patch>,
+    nodes: Vec<Node>,
+    /// Base face, sub-face and domain of each node (while building; emptied after).
+    node_info: Vec<(u32, u8, Frame)>,
+    /// Inner nodes' children (4 each, in quadrant order), as node indices while building.
+    children: Vec<[u32; 4]>,
+    /// The same children as nodes (`kids[c][q] = nodes[children[c][q]]`), filled at the end of
+    /// the build: the lookup reads one array per level instead of two.
+    kids: Vec<[Node; 4]>,
+    /// Root node of sub-face `k` of face `f` at `roots[root_offsets[f] + k]`.
+    roots: Vec<u32>,
+    root_offsets: Vec<u32>,
+    /// Control points as combinations of the vertices of all levels (level 0's first, then
+    /// each refined cut-out's, see `chain`).
+    pub point_stencils: StencilTable,
+    /// Refinement chain: for each level, the vertices of the previous level's cut-out (indices
+    /// into that level's vertices) and the table that refines them.
+    chain: Vec<(Vec<u32>, StencilTable)>,
+    /// Control point positions (from the last [`Self::set_positions`]).
+    pub points: Vec<[f64; 3]>,
+    end_caps: Vec<CapMesh>,
+    /// Stam's matrices by valence (shared, see [`crate::patch::stam::basis`]).
+    stam: Vec<Option<std::sync::Arc<crate::patch::stam::StamBasis>>>,
+    /// Whether Stam patches are made (always, but for tests comparing with end caps).
+    use_stam: bool,
+    /// Crease rule.
+    pub method: CreaseMethod,
+    /// Subdivision options the table was built with (boundary mode, crease rule).
+    pub mesh_options: Options,
+    /// Options used.
+    pub options: PatchOptions,
+    /// Build statistics.
+    pub stats: PatchStats,
+}
+
+/// A limit-surface sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Position.
+    pub p: [f64; 3],
+    /// `∂P/∂u` in the (sub-)face's parameterisation.
+    pub du: [f64; 3],
+    /// `∂P/∂v`.
+    pub dv: [f64; 3],
+    /// `∂²P/∂u²`.
+    pub duu: [f64; 3],
+    /// `∂²P/∂u∂v`.
+    pub duv: [f64; 3],
+    /// `∂²P/∂v²`.
+    pub dvv: [f64; 3],
+    /// Level of the patch that was evaluated.
+    pub level: u8,
+}
+
+impl PatchTable {
+    /// Bytes used by the table (stencils, patches, tree, end-cap topology; not the levels that
+    /// end caps refine lazily when queries reach them, nor the shared Stam matrices).
+    pub fn bytes(&self) -> usize {
+        let topo_bytes: usize = self
+            .end_caps
+            .iter()
+            .map(|c| {
+                let t = &c.root.level.topo;
+                let points = 4 * c.points.len();
+                4 * (t.face_offsets.len()
+                    + t.face_verts.len()
+                    + t.face_edges.len()
+                    + 2 * t.edge_verts.len()
+                    + t.edge_face_offsets.len()
+                    + t.edge_faces.len()
+                    + t.vert_face_offsets.len()
+                    + 2 * t.vert_faces.len()
+                    + t.vert_edge_offsets.len()
+                    + t.vert_edges.len()
+                    + c.root.level.edge_sharpness.len()
+                    + c.root.level.vertex_sharpness.len())
+                    + points
+            })
+            .sum();
+        self.point_stencils.bytes()
+            + self
+                .chain
+                .iter()
+                .map(|(sel, t)| sel.len() * 4 + t.bytes())
+                .sum::<usize>()
+            + self.points.len() * 24
+            + self.patches.len() * std::mem::size_of::<Patch>()
+            + self.nodes.len() * std::mem::size_of::<Node>()
+            + self.kids.len() * std::mem::size_of::<[Node; 4]>()
+            + self.roots.len() * 4
+            + self.root_offsets.len() * 4
+            + topo_bytes
+    }
+
+    /// Number of sub-faces of base face `f` (1 for a quad, n for an n-gon).
+    pub fn sub_faces(&self, f: usize) -> usize {
+        (self.root_offsets[f + 1] - self.root_offsets[f]) as usize
+    }
+
+    /// Number of base faces.
+    pub fn num_faces(&self) -> usize {
+        self.root_offsets.len() - 1
+    }
+}
