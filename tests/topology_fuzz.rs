@@ -160,8 +160,9 @@ fn check_refinement(mesh: &ControlMesh, options: Options, what: &str) {
                 finite(&f.position) && finite(&f.du) && finite(&f.dv),
                 "level {l} limit frame {i} is not finite: {f:?}: {what}"
             );
+            // Chaikin's extrapolating edge points (above) can carry the limit outside too.
             assert!(
-                inside(&f.position),
+                inside(&f.position) || options.crease_method == CreaseMethod::Chaikin,
                 "level {l} limit position {i} = {:?} is outside the control bounds: {what}",
                 f.position
             );
