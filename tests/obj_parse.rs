@@ -512,9 +512,23 @@ fn face_with_two_vertices() {
 
 #[test]
 fn repeated_vertex_in_face() {
-    let e = err(&format!("{TRI}v 0 1 0\nf 1 2 3 2\n"));
-    check(&e, ErrorKind::Topology, 5, "face 1");
-    assert!(e.message.contains("twice"), "{e}");
+    // OpenSubdiv accepts a face that repeats a vertex: the edges it uses twice get a second
+    // instance each, and all four are non-manifold (so infinitely sharp).
+    let m = ok(&format!("{TRI}v 0 1 0\nf 1 2 3 2\n"));
+    let t =
+        limitray::mesh::topology::Topology::new(m.num_vertices(), &m.face_offsets, &m.face_verts)
+            .unwrap();
+    let face_edges = t.face_edge_list(0);
+    assert_eq!(face_edges.len(), 4);
+    let mut distinct = face_edges.to_vec();
+    distinct.sort();
+    distinct.dedup();
+    assert_eq!(
+        distinct.len(),
+        4,
+        "every use is an edge of its own: {face_edges:?}"
+    );
+    assert!(face_edges.iter().all(|&e| t.edge_nonmanifold[e as usize]));
 }
 
 #[test]
