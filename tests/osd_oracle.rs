@@ -405,3 +405,55 @@ fn chaikin_with_boundary_none_far_is_approximate() {
         assert!(limitray_dist(s.dv, dv) / scale < 1e-6, "dv at ({u}, {v})");
     }
 }
+
+/// Seed 235, shrunk (the first failure once the generator made degenerate faces): one face
+/// `f 1 2 3 3` whose repeated vertex makes a degenerate edge. Its two halves join the same two
+/// vertices after one step; cut-outs that re-discovered edges from vertex pairs glued them into
+/// one interior edge, and eval was off by 1.6e-2 of the diagonal (2.6e-1 on the degenerate
+/// edge itself). Far, and the closed form: every corner and boundary edge is infinitely sharp,
+/// so the limit surface is the bilinear patch of the corners (1, 2, 3, 3): along the
+/// degenerate edge it is vertex 3 itself.
+#[test]
+fn degenerate_edge_halves_stay_apart() {
+    use limitray::mesh::obj::parse_obj;
+    use limitray::patch::{PatchOptions, PatchTable};
+    let p = [
+        [-0.1264224211525293, 0.11394205119058398, 0.9265353796790343],
+        [1.0655049750272951, -0.1044241197452457, -0.0479323464167199],
+        [0.3098522696772503, 0.9636908939318767, -0.03613008502041659],
+    ];
+    let mut gm = oracle::gen::GenMesh {
+        positions: p.to_vec(),
+        faces: vec![vec![0, 1, 2, 2]],
+        boundary: 1,
+        ..Default::default()
+    };
+    gm.recipe = "seed 235, shrunk".into();
+    let mesh = parse_obj(&gm.to_obj(), Some("seed235.obj")).unwrap();
+    let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+    // Closed form, 1e-12 of the diagonal (measured 2e-16): bilinear in (u, v) with corners
+    // p0 (0, 0), p1 (1, 0), p2 (1, 1) and p2 (0, 1).
+    let diag = mesh.diagonal();
+    let mut rng = oracle::gen::Rng::new(235);
+    let mut samples = vec![(0, 0, 0.5, 0.7474841577135962), (0, 0, 0.5, 1.0)];
+    for _ in 0..200 {
+        let (u, v) = (rng.unit(), rng.unit());
+        let q: [f64; 3] = std::array::from_fn(|i| {
+            (1.0 - u) * (1.0 - v) * p[0][i] + u * (1.0 - v) * p[1][i] + v * p[2][i]
+        });
+        let s = table.eval(limitray::FaceCoord::new(0, 0, u, v)).unwrap();
+        assert!(
+            limitray_dist(s.p, q) / diag < 1e-12,
+            "({u}, {v}): {:?} vs {q:?}",
+            s.p
+        );
+        samples.push((0, 0, u, v));
+    }
+    let case = Case {
+        mesh: gm,
+        samples,
+        levels: 4,
+        single_crease: true,
+    };
+    assert_case_matches("degenerate_edge_halves_stay_apart", &case);
+}

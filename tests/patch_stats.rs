@@ -35,6 +35,14 @@ fn single_crease_patches_keep_the_count_flat() {
     // with single-crease patches: within 1% of the crease-free count at any sharpness
     // (measured +0.7% at S = 4: the crease ends, where sharpness varies, still refine)
     assert!((s4 as f64) < 1.01 * s0 as f64 && s2 <= s4);
+    // Figure 2's right end (issue 12: unchanged by the exactness work): at S = 8 at most 1.2×
+    // the crease-free count.
+    let s8 = patches(8.0, true);
+    println!("single-crease at S = 8: {s8}");
+    assert!(
+        (s8 as f64) <= 1.2 * s0 as f64,
+        "{s8} patches at S = 8, {s0} at S = 0"
+    );
     // subdivision only: the extra patches at least double per extra level of sharpness
     // (measured ×6.5 from S = 2 to S = 4)
     assert!((n4 - s0) as f64 > 4.0 * (n2 - s0) as f64);
