@@ -457,3 +457,71 @@ fn degenerate_edge_halves_stay_apart() {
     };
     assert_case_matches("degenerate_edge_halves_stay_apart", &case);
 }
+
+/// Seed 1020676, shrunk (found by the 100,000-mesh soak): a bipyramid of four triangles with
+/// two holes and Chaikin creases of 1 and 4 meeting. Far's adaptive REGULAR level-4 patch next
+/// to the holes is 2.0e-4 of the diagonal from the limit of Far's own uniform refinement
+/// (which ours matches to 1e-7, the precision of its OBJ dump, at levels 3–5); without the
+/// holes, or with the uniform rule, Far's patches agree with ours to 1e-16. Ours equals the
+/// exact limit (1e-12 of the diagonal, measured 2e-16); the comparison takes the exact limit
+/// as the reference for Chaikin meshes with holes (compare.rs).
+#[test]
+fn chaikin_next_to_a_hole_far_is_approximate() {
+    use limitray::mesh::obj::parse_obj;
+    use limitray::patch::{PatchOptions, PatchTable};
+    let gm = oracle::gen::GenMesh {
+        positions: vec![
+            [
+                -0.0028284253869739207,
+                0.14296422930696592,
+                1.0277124620351765,
+            ],
+            [
+                -0.01851540938905768,
+                -0.14100548019108813,
+                -0.9426854165295177,
+            ],
+            [-0.4223673488988521, 0.9190924709793186, 0.05784268177667415],
+            [
+                -0.9796757964540526,
+                0.1497966976005005,
+                -0.10862219447835303,
+            ],
+            [
+                -0.4462859558193329,
+                -0.7473607500865838,
+                -0.055680118456035974,
+            ],
+        ],
+        faces: vec![vec![0, 2, 3], vec![1, 3, 2], vec![0, 3, 4], vec![1, 4, 3]],
+        creases: [((0, 3), 1.0), ((3, 4), 4.0)].into_iter().collect(),
+        holes: vec![0, 2],
+        boundary: 1,
+        chaikin: true,
+        recipe: "seed 1020676, shrunk".into(),
+        ..Default::default()
+    };
+    let mesh = parse_obj(&gm.to_obj(), Some("seed1020676.obj")).unwrap();
+    let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+    let diag = mesh.diagonal();
+    for (u, v) in [
+        (0.1875, 1.0 / 512.0),
+        (0.1875, 0.0),
+        (0.25, 0.0625),
+        (0.5, 0.5),
+    ] {
+        let ours = table.eval(limitray::FaceCoord::new(3, 2, u, v)).unwrap().p;
+        let exact = oracle::exact::limit_at(&mesh, 3, 2, u, v).unwrap();
+        assert!(limitray_dist(ours, exact) / diag < 1e-12, "({u}, {v})");
+    }
+    let mut rng = oracle::gen::Rng::new(1020676);
+    let mut samples = vec![(3, 2, 0.18968719096968756, 0.001953125)];
+    samples.extend(oracle::gen::samples(&gm, &mut rng, 200));
+    let case = Case {
+        mesh: gm,
+        samples,
+        levels: 4,
+        single_crease: true,
+    };
+    assert_case_matches("chaikin_next_to_a_hole_far_is_approximate", &case);
+}
