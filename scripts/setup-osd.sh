@@ -55,7 +55,9 @@ fi
 mkdir -p "$OUTDIR"
 build() {
     local src="$ROOT/benches/osd/$1.cpp" bin="$OUTDIR/$1"
-    if [[ "${FORCE:-0}" == 1 || ! -x "$bin" || "$src" -nt "$bin" || "${BASH_SOURCE[0]}" -nt "$bin" ]]; then
+    local header="$ROOT/benches/osd/osd_mesh.h"
+    if [[ "${FORCE:-0}" == 1 || ! -x "$bin" || "$src" -nt "$bin" || "$header" -nt "$bin" ||
+          "${BASH_SOURCE[0]}" -nt "$bin" ]]; then
         echo "setup-osd: building $bin" >&2
         g++ -std=c++17 -O2 -DNDEBUG -Wall -Wextra -o "$bin.tmp" "$src" -losdCPU
         mv -f "$bin.tmp" "$bin"

@@ -18,18 +18,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn reference_binary() -> Option<PathBuf> {
-    let bin = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/osd/osd_refine_bench");
-    if bin.is_file() {
-        return Some(bin);
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!(
-            "CI: {} is missing; .ci/run must run scripts/setup-osd.sh",
-            bin.display()
-        );
-    }
-    eprintln!("note: skipping: OpenSubdiv reference not built (bash scripts/setup-osd.sh)");
-    None
+    common::osd_binary("osd_refine_bench")
 }
 
 fn far_refine(

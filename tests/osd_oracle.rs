@@ -11,6 +11,7 @@
 //!   OBJ and written to `target/oracle-failures/`.
 //! - `soak` (ignored; `scripts/soak-osd.sh N`): N meshes, prints the worst case.
 
+mod common;
 mod oracle;
 
 use oracle::compare::Worst;

@@ -63,173 +63,22 @@ using namespace OpenSubdiv;
 
 namespace {
 
-struct Point3 {
-    double x, y, z;
-    void Clear(void * = nullptr) { x = y = z = 0.0; }
-    void AddWithWeight(Point3 const &src, double w) {
-        x += w * src.x;
-        y += w * src.y;
-        z += w * src.z;
-    }
-};
+constexpr char const *kProgram = "osd_oracle";
 
-struct Mesh {
-    std::vector<Point3> positions;
-    std::vector<int> faceSizes, faceVerts;
-    std::vector<int> creasePairs;
-    std::vector<float> creaseSharpness;
-    std::vector<int> cornerVerts;
-    std::vector<float> cornerSharpness;
-    std::vector<int> holes;
-    Sdc::Options::VtxBoundaryInterpolation boundary = Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER;
-    Sdc::Options::CreasingMethod creaseMethod = Sdc::Options::CREASE_UNIFORM;
-    Sdc::Options::TriangleSubdivision triangles = Sdc::Options::TRI_SUB_CATMARK;
-};
+}  // namespace
 
-[[noreturn]] void fail(std::string const &msg) {
-    std::fprintf(stderr, "osd_oracle: %s\n", msg.c_str());
-    std::exit(1);
-}
+#include "osd_mesh.h"
 
-long parseInt(std::string const &s, char const *what) {
-    char *end = nullptr;
-    errno = 0;
-    long v = std::strtol(s.c_str(), &end, 10);
-    if (s.empty() || *end != '\0' || errno != 0) throw std::runtime_error(std::string("bad ") + what + " '" + s + "'");
-    return v;
-}
+namespace {
 
-double parseReal(std::string const &s, char const *what) {
-    char *end = nullptr;
-    errno = 0;
-    double v = std::strtod(s.c_str(), &end);
-    if (s.empty() || *end != '\0' || errno == ERANGE) throw std::runtime_error(std::string("bad ") + what + " '" + s + "'");
-    return v;
-}
-
-void parseTag(Mesh &m, std::vector<std::string> const &tok) {
-    if (tok.size() < 3) throw std::runtime_error("tag without argument counts");
-    std::string const &name = tok[1];
-    std::vector<long> counts;
-    {
-        std::stringstream ss(tok[2]);
-        for (std::string c; std::getline(ss, c, '/');) counts.push_back(parseInt(c, "tag count"));
-    }
-    if (counts.size() < 2 || counts.size() > 3) throw std::runtime_error("bad tag counts '" + tok[2] + "'");
-    long ni = counts[0], nf = counts[1], ns = counts.size() == 3 ? counts[2] : 0;
-    if (ni < 0 || nf < 0 || ns < 0 || long(tok.size()) != 3 + ni + nf + ns)
-        throw std::runtime_error("tag '" + name + "' argument count mismatch");
-    std::vector<long> ints;
-    std::vector<float> floats;
-    std::vector<std::string> strs;
-    for (long k = 0; k < ni; ++k) ints.push_back(parseInt(tok[3 + k], "tag int"));
-    for (long k = 0; k < nf; ++k) floats.push_back(float(parseReal(tok[3 + ni + k], "tag float")));
-    for (long k = 0; k < ns; ++k) strs.push_back(tok[3 + ni + nf + k]);
-    if (name == "crease") {
-        if (ni < 2 || ni % 2 || (nf != 1 && nf != ni / 2)) throw std::runtime_error("bad crease tag");
-        for (long p = 0; p < ni / 2; ++p) {
-            m.creasePairs.push_back(int(ints[2 * p]));
-            m.creasePairs.push_back(int(ints[2 * p + 1]));
-            m.creaseSharpness.push_back(nf == 1 ? floats[0] : floats[p]);
-        }
-    } else if (name == "corner") {
-        if (ni < 1 || (nf != 1 && nf != ni)) throw std::runtime_error("bad corner tag");
-        for (long k = 0; k < ni; ++k) {
-            m.cornerVerts.push_back(int(ints[k]));
-            m.cornerSharpness.push_back(nf == 1 ? floats[0] : floats[k]);
-        }
-    } else if (name == "hole") {
-        for (long f : ints) m.holes.push_back(int(f));
-    } else if (name == "interpolateboundary") {
-        if (ni != 1 || ints[0] < 0 || ints[0] > 2) throw std::runtime_error("bad interpolateboundary");
-        m.boundary = ints[0] == 0   ? Sdc::Options::VTX_BOUNDARY_NONE
-                     : ints[0] == 1 ? Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER
-                                    : Sdc::Options::VTX_BOUNDARY_EDGE_ONLY;
-    } else if (name == "creasemethod") {
-        if (ns != 1) throw std::runtime_error("bad creasemethod");
-        if (strs[0] == "chaikin") m.creaseMethod = Sdc::Options::CREASE_CHAIKIN;
-        else if (strs[0] == "uniform" || strs[0] == "normal") m.creaseMethod = Sdc::Options::CREASE_UNIFORM;
-        else throw std::runtime_error("unknown creasemethod '" + strs[0] + "'");
-    } else if (name == "smoothtriangles") {
-        if (ns != 1) throw std::runtime_error("bad smoothtriangles");
-        if (strs[0] == "smooth") m.triangles = Sdc::Options::TRI_SUB_SMOOTH;
-        else if (strs[0] == "catmark") m.triangles = Sdc::Options::TRI_SUB_CATMARK;
-        else throw std::runtime_error("unknown smoothtriangles '" + strs[0] + "'");
-    } else {
-        std::fprintf(stderr, "osd_oracle: ignoring tag '%s'\n", name.c_str());
-    }
-}
-
-Mesh readObj(std::string const &path) {
-    std::ifstream in(path);
-    if (!in) fail("cannot open " + path);
-    Mesh m;
-    std::string text;
-    int lineNo = 0;
-    while (std::getline(in, text)) {
-        ++lineNo;
-        size_t hash = text.find('#');
-        if (hash != std::string::npos) text.erase(hash);
-        std::istringstream ls(text);
-        std::vector<std::string> tok;
-        for (std::string t; ls >> t;) tok.push_back(t);
-        if (tok.empty()) continue;
-        try {
-            if (tok[0] == "v") {
-                if (tok.size() < 4) throw std::runtime_error("vertex needs 3 coordinates");
-                m.positions.push_back({parseReal(tok[1], "coordinate"), parseReal(tok[2], "coordinate"),
-                                       parseReal(tok[3], "coordinate")});
-            } else if (tok[0] == "f") {
-                if (tok.size() < 4) throw std::runtime_error("face needs at least 3 vertices");
-                long nv = long(m.positions.size());
-                for (size_t k = 1; k < tok.size(); ++k) {
-                    long i = parseInt(tok[k].substr(0, tok[k].find('/')), "face index");
-                    long v = i > 0 ? i - 1 : nv + i;
-                    if (i == 0 || v < 0 || v >= nv) throw std::runtime_error("face index out of range");
-                    m.faceVerts.push_back(int(v));
-                }
-                m.faceSizes.push_back(int(tok.size() - 1));
-            } else if (tok[0] == "t") {
-                parseTag(m, tok);
-            }
-        } catch (std::exception const &e) {
-            fail(path + ":" + std::to_string(lineNo) + ": " + e.what());
-        }
-    }
-    if (m.faceSizes.empty()) fail(path + ": no faces");
-    return m;
-}
-
-bool gFarError = false;
-void onFarError(Far::ErrorType, const char *msg) {
-    std::fprintf(stderr, "osd_oracle: OpenSubdiv error: %s\n", msg);
-    gFarError = true;
-}
-void onFarWarning(const char *msg) { std::fprintf(stderr, "osd_oracle: OpenSubdiv warning: %s\n", msg); }
-
-Far::TopologyRefiner *createRefiner(Mesh const &m) {
-    Far::TopologyDescriptor desc;
-    desc.numVertices = int(m.positions.size());
-    desc.numFaces = int(m.faceSizes.size());
-    desc.numVertsPerFace = m.faceSizes.data();
-    desc.vertIndicesPerFace = m.faceVerts.data();
-    desc.numCreases = int(m.creaseSharpness.size());
-    desc.creaseVertexIndexPairs = m.creasePairs.data();
-    desc.creaseWeights = m.creaseSharpness.data();
-    desc.numCorners = int(m.cornerVerts.size());
-    desc.cornerVertexIndices = m.cornerVerts.data();
-    desc.cornerWeights = m.cornerSharpness.data();
-    desc.numHoles = int(m.holes.size());
-    desc.holeIndices = m.holes.data();
-    Sdc::Options sdc;
-    sdc.SetVtxBoundaryInterpolation(m.boundary);
-    sdc.SetCreasingMethod(m.creaseMethod);
-    sdc.SetTriangleSubdivision(m.triangles);
-    using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-    Far::TopologyRefiner *r = Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, sdc));
-    if (!r || gFarError) fail("OpenSubdiv rejected the mesh topology");
-    return r;
-}
+using Point3 = osdmesh::Point3T<double>;
+using Mesh = osdmesh::MeshT<double>;
+using osdmesh::createRefiner;
+using osdmesh::fail;
+using osdmesh::gFarError;
+using osdmesh::onFarError;
+using osdmesh::onFarWarning;
+using osdmesh::parseInt;
 
 // Positions of every level of `r` (level 0 = control points), concatenated.
 std::vector<Point3> interpolateAll(Far::TopologyRefiner const &r, std::vector<Point3> const &base, size_t extra) {
@@ -424,7 +273,7 @@ int main(int argc, char **argv) {
         }
     }
     if (path.empty() || (levels == 0 && !eval)) usage();
-    Mesh m = readObj(path);
+    Mesh m = osdmesh::readObj<double>(path);
     if (levels > 0) refineUniform(m, levels);
     if (eval) evaluate(m, isolation, endcap);
     return 0;

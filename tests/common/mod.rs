@@ -152,3 +152,23 @@ pub fn run_limitray<S: AsRef<std::ffi::OsStr>>(
         .wait_with_output()
         .expect("failed to wait for limitray")
 }
+
+/// One of the OpenSubdiv reference programs built by `scripts/setup-osd.sh` (`osd_oracle`,
+/// `osd_refine_bench`) under `target/osd/`; `None` (with a note) when it is not built, except
+/// under CI (`CI` set), where a missing reference is a failure.
+pub fn osd_binary(name: &str) -> Option<std::path::PathBuf> {
+    let bin = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/osd")
+        .join(name);
+    if bin.is_file() {
+        return Some(bin);
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!(
+            "CI: {} is missing; .ci/run must run scripts/setup-osd.sh",
+            bin.display()
+        );
+    }
+    eprintln!("note: skipping: OpenSubdiv reference {name} not built (bash scripts/setup-osd.sh)");
+    None
+}

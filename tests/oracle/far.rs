@@ -8,18 +8,7 @@ use std::process::{Command, Stdio};
 /// The oracle binary; `None` (with a note) when it is not built, except under `CI=true`, where
 /// a missing reference is a failure.
 pub fn binary() -> Option<PathBuf> {
-    let bin = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/osd/osd_oracle");
-    if bin.is_file() {
-        return Some(bin);
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!(
-            "CI: {} is missing; .ci/run must run scripts/setup-osd.sh",
-            bin.display()
-        );
-    }
-    eprintln!("note: skipping: OpenSubdiv oracle not built (bash scripts/setup-osd.sh)");
-    None
+    crate::common::osd_binary("osd_oracle")
 }
 
 /// One uniformly refined level as Far orders it.

@@ -4,23 +4,21 @@
 //! three boundary modes and both crease rules. Written as OBJ with OpenSubdiv's tags so that
 //! both sides read the same text.
 
+use limitray::harness::rng::SplitMix64;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-/// SplitMix64: small, fast, and the same on every platform.
+/// The generator's random stream: the library's SplitMix64 from a scrambled seed, with the
+/// draws the generator needs (`below` by remainder, which the recorded seeds depend on).
 #[derive(Clone, Debug)]
-pub struct Rng(u64);
+pub struct Rng(SplitMix64);
 
 impl Rng {
     pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x9e37_79b9_7f4a_7c15)
+        Rng(SplitMix64::new(seed ^ 0x9e37_79b9_7f4a_7c15))
     }
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     /// Uniform in `0..n` (`n > 0`).
     pub fn below(&mut self, n: usize) -> usize {
@@ -28,7 +26,7 @@ impl Rng {
     }
     /// Uniform in `[0, 1)`.
     pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+        self.0.next_f64()
     }
     pub fn chance(&mut self, p: f64) -> bool {
         self.unit() < p
