@@ -688,27 +688,12 @@ impl Parser {
             }
             "creasemethod" => {
                 self.unused(line, el, &[ints, floats]);
-                let [s] = strings else {
-                    return Err(self.err(
-                        line,
-                        el,
-                        format!("expected 1 string, found {}", strings.len()),
-                    ));
-                };
-                self.mesh.options.crease_method = match unquote(s) {
-                    "chaikin" => CreaseMethod::Chaikin,
-                    "normal" | "uniform" => CreaseMethod::Uniform,
-                    other => {
-                        return Err(self.err(
-                            line,
-                            el,
-                            format!(
-                                "unknown crease method {} (expected chaikin, normal or uniform)",
-                                quote(other)
-                            ),
-                        ))
-                    }
-                };
+                let choice = ["chaikin", "normal", "uniform"];
+                self.mesh.options.crease_method =
+                    match self.one_of(line, el, strings, "crease method", &choice)? {
+                        "chaikin" => CreaseMethod::Chaikin,
+                        _ => CreaseMethod::Uniform,
+                    };
                 Ok(())
             }
             "vertexedit" | "edgeedit" | "faceedit" => {
@@ -718,27 +703,9 @@ impl Parser {
             }
             "smoothtriangles" => {
                 self.unused(line, el, &[ints, floats]);
-                let [s] = strings else {
-                    return Err(self.err(
-                        line,
-                        el,
-                        format!("expected 1 string, found {}", strings.len()),
-                    ));
-                };
-                self.mesh.options.smooth_triangles = match unquote(s) {
-                    "smooth" => true,
-                    "catmark" => false,
-                    other => {
-                        return Err(self.err(
-                            line,
-                            el,
-                            format!(
-                                "unknown triangle rule {} (expected smooth or catmark)",
-                                quote(other)
-                            ),
-                        ))
-                    }
-                };
+                let choice = ["smooth", "catmark"];
+                self.mesh.options.smooth_triangles =
+                    self.one_of(line, el, strings, "triangle rule", &choice)? == "smooth";
                 Ok(())
             }
             "facevaryinginterpolateboundary" | "facevaryingpropagatecorners" => {
@@ -755,6 +722,37 @@ impl Parser {
     }
 
     /// Warns when a tag carries values it does not use.
+    /// The tag's one string argument (unquoted), which must be one of `choice`.
+    fn one_of<'a>(
+        &self,
+        line: usize,
+        el: &str,
+        strings: &[&'a str],
+        what: &str,
+        choice: &[&'static str],
+    ) -> Result<&'static str> {
+        let [s] = strings else {
+            return Err(self.err(
+                line,
+                el,
+                format!("expected 1 string, found {}", strings.len()),
+            ));
+        };
+        let s: &'a str = unquote(s);
+        choice.iter().copied().find(|&c| c == s).ok_or_else(|| {
+            let expected = match choice {
+                [a, b] => format!("{a} or {b}"),
+                [rest @ .., last] => format!("{} or {last}", rest.join(", ")),
+                [] => String::new(),
+            };
+            self.err(
+                line,
+                el,
+                format!("unknown {what} {} (expected {expected})", quote(s)),
+            )
+        })
+    }
+
     fn unused(&mut self, line: usize, el: &str, unused: &[&[&str]]) {
         if unused.iter().any(|v| !v.is_empty()) {
             self.warn(line, format!("{el}: unused values ignored"));
