@@ -43,7 +43,7 @@ pub mod threads;
 pub mod vec3;
 
 pub use bvh::exact::ExactHit;
-pub use bvh::{Hit, Ray};
+pub use bvh::{Hit, Ray, Ray64};
 pub use coord::FaceCoord;
 pub use dice::{DiceOptions, DiceRate, DicedMesh};
 pub use error::{Error, ErrorKind, Result};

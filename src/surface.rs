@@ -30,6 +30,7 @@
 //! ```
 
 use crate::bvh::exact::{refine_hit, ExactHit};
+use crate::bvh::Ray64;
 use crate::bvh::{Hit, MeshBvh, Ray};
 use crate::coord::FaceCoord;
 use crate::dice::{dice, DiceOptions, DicedMesh};
@@ -197,11 +198,11 @@ impl TracedSurface {
         self.bvh.intersect_batch(rays)
     }
 
-    /// The closest diced hit refined onto the exact limit surface (Newton in `f64`); `None`
-    /// for a miss or a hit that cannot be refined (grazing, or the exact point in a
-    /// neighbouring face).
-    pub fn intersect_exact(&self, ray: &Ray) -> Option<ExactHit> {
-        let hit = self.bvh.intersect(ray)?;
+    /// The closest diced hit of `ray`'s `f32` rounding, refined onto the exact limit surface
+    /// for `ray` itself (Newton in `f64`); `None` for a miss or a hit that cannot be refined
+    /// (grazing, or the exact point in a neighbouring face).
+    pub fn intersect_exact(&self, ray: &Ray64) -> Option<ExactHit> {
+        let hit = self.bvh.intersect(&ray.to_f32())?;
         refine_hit(&self.table, ray, &hit)
     }
 }

@@ -87,14 +87,23 @@ fn trace_exact_is_on_the_limit_surface() {
         .split_whitespace()
         .map(|v| v.parse().unwrap())
         .collect();
-    let o = [0.1f32 as f64, 0.2f32 as f64, 0.0];
-    let dir = [0.3f32 as f64, 0.5f32 as f64, 0.8f32 as f64];
+    // The exact answer is for the ray as given in f64 (1e-12 of the cube's size; measured
+    // about 1e-16), not for its f32 rounding, which is 1e-8 to 1e-9 away.
+    let o = [0.1, 0.2, 0.0];
+    let dir = [0.3, 0.5, 0.8];
+    let (o32, dir32) = (
+        o.map(|c: f64| c as f32 as f64),
+        dir.map(|c: f64| c as f32 as f64),
+    );
+    let mut off32 = 0.0f64;
     for k in 0..3 {
         assert!(
             (o[k] + x[0] * dir[k] - p[k]).abs() < 1e-12,
             "axis {k}: {x:?} vs {p:?}"
         );
+        off32 = off32.max((o32[k] + x[0] * dir32[k] - p[k]).abs());
     }
+    assert!(off32 > 1e-10, "the f32 ray would be {off32:e} off");
     // At rate 2 the diced hit is off the surface by the dicing error; the exact one is not.
     assert!((d[0] - x[0]).abs() > 1e-6);
 }

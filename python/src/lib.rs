@@ -6,7 +6,7 @@
 //! CLI prints after `error: `): `OSError` for files, `ValueError` for everything else.
 
 use limitray::bvh::exact::refine_hit;
-use limitray::bvh::{MeshBvh, Ray};
+use limitray::bvh::{MeshBvh, Ray64};
 use limitray::dice::{dice, DiceOptions, DiceRate};
 use limitray::error::{Error, ErrorKind};
 use limitray::mesh::obj::read_obj;
@@ -245,8 +245,8 @@ impl Surface {
     fn trace<'py>(
         &self,
         py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f32>,
-        directions: PyReadonlyArray2<'py, f32>,
+        origins: PyReadonlyArray2<'py, f64>,
+        directions: PyReadonlyArray2<'py, f64>,
         rate: u32,
         exact: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
@@ -263,21 +263,27 @@ impl Surface {
         let d = directions.as_slice()?.to_vec();
         let n = shape[0];
         let res = py.detach(|| -> PyResult<TraceOut> {
+            // The rays as given (f64, for the exact intersector) and their f32 rounding (for
+            // the diced surface's BVH, like the CLI).
+            let mut rays64 = Vec::with_capacity(n);
             let mut rays = Vec::with_capacity(n);
             for i in 0..n {
                 let (oi, di) = (&o[3 * i..3 * i + 3], &d[3 * i..3 * i + 3]);
-                if let Some(x) = oi.iter().chain(di).find(|x| !x.is_finite()) {
+                if let Some(x) = oi.iter().chain(di).find(|&&x| !(x as f32).is_finite()) {
                     return Err(usage(format!("ray {i}: invalid number '{x}'")));
                 }
-                if di.iter().all(|&x| x == 0.0) {
+                let ray = Ray64::new([oi[0], oi[1], oi[2]], [di[0], di[1], di[2]]);
+                let rounded = ray.to_f32();
+                if rounded.dir == [0.0; 3] {
                     return Err(usage(format!("ray {i}: ray direction is zero")));
                 }
-                rays.push(Ray::new([oi[0], oi[1], oi[2]], [di[0], di[1], di[2]]));
+                rays64.push(ray);
+                rays.push(rounded);
             }
             let bvh = self.bvh(rate).map_err(py_err)?;
             let hits = bvh.intersect_batch(&rays);
             let mut out = TraceOut::with_capacity(n);
-            for (h, ray) in hits.iter().zip(&rays) {
+            for (h, ray) in hits.iter().zip(&rays64) {
                 match h {
                     None => out.miss(),
                     Some(h) => match exact.then(|| refine_hit(&self.table, ray, h)).flatten() {

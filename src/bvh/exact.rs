@@ -6,7 +6,7 @@
 //! intersection lies in a neighbouring face (the iteration leaves the unit square). Both are
 //! reported as `None` rather than as a wrong answer.
 
-use super::ray::{Hit, Ray};
+use super::ray::{Hit, Ray64};
 use crate::coord::FaceCoord;
 use crate::patch::PatchTable;
 use crate::vec3::{cross, dot, norm};
@@ -37,10 +37,10 @@ pub struct ExactHit {
 /// Largest number of Newton steps.
 const MAX_STEPS: u32 = 40;
 
-/// Refines `hit` of `ray` onto the exact limit surface of `table`.
-pub fn refine_hit(table: &PatchTable, ray: &Ray, hit: &Hit) -> Option<ExactHit> {
-    let o = ray.origin.map(|x| x as f64);
-    let d = ray.dir.map(|x| x as f64);
+/// Refines `hit` (found for `ray`'s `f32` rounding on the diced mesh) onto the exact limit
+/// surface of `table`, for `ray` itself in `f64`.
+pub fn refine_hit(table: &PatchTable, ray: &Ray64, hit: &Hit) -> Option<ExactHit> {
+    let (o, d) = (ray.origin, ray.dir);
     let (face, k) = (hit.face as usize, hit.k as usize);
     let (mut u, mut v, mut t) = (hit.u as f64, hit.v as f64, hit.t as f64);
     let scale = norm(o) + norm(d) * t.abs() + 1.0;

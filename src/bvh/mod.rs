@@ -10,6 +10,6 @@ pub mod scene;
 pub mod triangle;
 
 pub use mesh::MeshBvh;
-pub use ray::{Hit, Ray};
+pub use ray::{Hit, Ray, Ray64};
 pub use scene::{SceneBvh, SceneHit};
 pub use triangle::intersect_triangle;

@@ -26,6 +26,36 @@ impl Ray {
     }
 }
 
+/// A ray in double precision, as the exact intersector takes it ([`crate::bvh::exact`]): the
+/// answer is for this ray, not for its `f32` rounding (which only seeds the search through the
+/// diced mesh's BVH, [`Ray64::to_f32`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray64 {
+    /// Origin.
+    pub origin: [f64; 3],
+    /// Direction (not necessarily normalised; must not be zero).
+    pub dir: [f64; 3],
+}
+
+impl Ray64 {
+    /// A ray over `[0, ∞)`.
+    pub fn new(origin: [f64; 3], dir: [f64; 3]) -> Ray64 {
+        Ray64 { origin, dir }
+    }
+
+    /// The nearest `f32` ray, for the BVH traversal.
+    pub fn to_f32(&self) -> Ray {
+        Ray::new(self.origin.map(|x| x as f32), self.dir.map(|x| x as f32))
+    }
+}
+
+impl From<&Ray> for Ray64 {
+    /// The same ray, widened exactly.
+    fn from(r: &Ray) -> Ray64 {
+        Ray64::new(r.origin.map(f64::from), r.dir.map(f64::from))
+    }
+}
+
 /// Where a ray meets a diced mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {

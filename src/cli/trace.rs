@@ -4,7 +4,7 @@
 use super::args::{load, DiceArgs, RuleArgs};
 use super::dice::dice_mesh;
 use crate::bvh::exact::refine_hit;
-use crate::bvh::{MeshBvh, Ray};
+use crate::bvh::{MeshBvh, Ray, Ray64};
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::PatchTable;
 use std::io::{BufRead, Write};
@@ -71,7 +71,10 @@ pub fn run(args: &TraceCmd) -> Result<()> {
     }
 }
 
-fn parse_ray(line: &str) -> std::result::Result<Ray, String> {
+/// A ray line `ox oy oz dx dy dz`: its `f32` rounding (for the diced mesh's BVH; each number
+/// parsed to `f32` directly, so that it is the correctly rounded value) and the ray as given
+/// in `f64` (for the exact intersector). Every number must be finite in `f32`.
+fn parse_ray(line: &str) -> std::result::Result<(Ray, Ray64), String> {
     let toks: Vec<&str> = line.split_whitespace().collect();
     if toks.len() != 6 {
         return Err(format!(
@@ -80,17 +83,23 @@ fn parse_ray(line: &str) -> std::result::Result<Ray, String> {
         ));
     }
     let mut x = [0f32; 6];
+    let mut x64 = [0f64; 6];
     for (i, t) in toks.iter().enumerate() {
+        let bad = || format!("invalid number '{t}'");
         x[i] = t
             .parse::<f32>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("invalid number '{t}'"))?;
+            .ok_or_else(bad)?;
+        x64[i] = t.parse::<f64>().map_err(|_| bad())?;
     }
     if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
         return Err("ray direction is zero".into());
     }
-    Ok(Ray::new([x[0], x[1], x[2]], [x[3], x[4], x[5]]))
+    Ok((
+        Ray::new([x[0], x[1], x[2]], [x[3], x[4], x[5]]),
+        Ray64::new([x64[0], x64[1], x64[2]], [x64[3], x64[4], x64[5]]),
+    ))
 }
 
 /// Reads rays from `input` and writes one line per input line: `hit t face k u v nx ny nz`
@@ -115,8 +124,8 @@ pub fn trace(
 /// Lines answered per batch by [`trace`].
 pub const TRACE_BATCH: usize = 1 << 16;
 
-/// A parsed input line: blank, a ray, or why it is bad.
-type Parsed = std::result::Result<Option<Ray>, String>;
+/// A parsed input line: blank, a ray (its `f32` rounding and itself), or why it is bad.
+type Parsed = std::result::Result<Option<(Ray, Ray64)>, String>;
 
 /// [`trace`] with the closest hits of the parsed rays computed by `hits` (one result per ray,
 /// in order, called once per batch): the GPU backend plugs in here.
@@ -131,11 +140,12 @@ pub fn trace_with(
     let mut bad = 0;
     let mut batch: Vec<(usize, Parsed)> = Vec::new();
     let mut answer = |batch: &mut Vec<(usize, Parsed)>, output: &mut dyn Write| -> Result<()> {
-        let rays: Vec<Ray> = batch
+        let rays: Vec<(Ray, Ray64)> = batch
             .iter()
             .filter_map(|(_, p)| p.as_ref().ok().copied().flatten())
             .collect();
-        let results = hits(&rays)?;
+        let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
+        let results = hits(&f32_rays)?;
         if results.len() != rays.len() {
             return Err(Error::new(
                 ErrorKind::Usage,
@@ -157,7 +167,7 @@ pub fn trace_with(
                         writeln!(output, "miss").map_err(io)?;
                         continue;
                     };
-                    match exact.then(|| refine_hit(table, ray, &h)) {
+                    match exact.then(|| refine_hit(table, &ray.1, &h)) {
                         Some(Some(x)) => writeln!(
                             output,
                             "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?} 1",

@@ -245,7 +245,7 @@ pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u6
                 .eval(FaceCoord::new(h.face, h.k, h.u as f64, h.v as f64))
                 .ok()?;
             let param_err = norm(sub(hp, s.p));
-            match refine_hit(table, ray, &h) {
+            match refine_hit(table, &ray.into(), &h) {
                 Some(x) => {
                     let along = (x.t - h.t as f64).abs() * norm(dir);
                     let bound = triangle_error_bound(table, d, h.triangle as usize);

@@ -101,19 +101,21 @@ class Surface:
         return {"p": out[:, 0:3], "du": out[:, 3:6], "dv": out[:, 6:9]}
 
     def trace(self, origins, directions, rate=16, exact=False):
-        """Closest hits of rays (``origins``, ``directions``: (N, 3), as float32 like the CLI)
-        on the limit surface diced ``rate`` segments per face edge, as ``limitray trace``.
+        """Closest hits of rays (``origins``, ``directions``: (N, 3)) on the limit surface
+        diced ``rate`` segments per face edge, as ``limitray trace``: the diced surface is
+        traced with the rays rounded to float32 (like the CLI).
 
-        With ``exact``, each hit is refined onto the exact limit surface (f64 Newton); a hit
-        that cannot be refined keeps the diced hit. Returns ``{"hit": bool (N,), "t", "face",
+        With ``exact``, each hit is refined onto the exact limit surface (f64 Newton) for the
+        rays as given in float64, not their float32 rounding; a hit that cannot be refined
+        keeps the diced hit. Returns ``{"hit": bool (N,), "t", "face",
         "k", "u", "v": (N,), "n": (N, 3)}``: float64 values (diced hits are float32 values,
         widened exactly), face and k int64; a miss has t = inf, face = k = -1, u, v, n = nan.
         With ``exact`` the dict also has ``"refined"``: bool (N,), true where Newton refined
         the hit (the CLI's tenth ``trace --exact`` field). The BVH of each rate is built once
         and kept.
         """
-        o = _floats("origins", origins, np.float32, shape=3)
-        d = _floats("directions", directions, np.float32, shape=3)
+        o = _floats("origins", origins, np.float64, shape=3)
+        d = _floats("directions", directions, np.float64, shape=3)
         if o.shape != d.shape:
             raise ValueError(f"origins {o.shape} and directions {d.shape} differ in shape")
         return self._s.trace(o, d, int(rate), bool(exact))
