@@ -3,7 +3,7 @@
 //! (mesh → patch table → dicing → BVH) together so that a user never has to.
 //!
 //! ```
-//! use limitray::{FaceCoord, Ray, Surface, SurfaceOptions};
+//! use limitray::{FaceCoord, Ray, Ray64, Surface, SurfaceOptions};
 //! use limitray::dice::{DiceOptions, DiceRate};
 //!
 //! // A cube (vertex i at the corners of [-1, 1]^3), counter-clockwise faces seen from outside.
@@ -24,7 +24,7 @@
 //! // Dice it into crack-free triangles and trace a ray from the centre: it always hits.
 //! let traced = surface.bvh(&DiceOptions { rate: DiceRate::Uniform(8), max_rate: 256 })?;
 //! let hit = traced.intersect(&Ray::new([0.0; 3], [0.3, 0.2, 1.0])).expect("closed surface");
-//! let exact = traced.intersect_exact(&Ray::new([0.0; 3], [0.3, 0.2, 1.0])).expect("refined");
+//! let exact = traced.intersect_exact(&Ray64::new([0.0; 3], [0.3, 0.2, 1.0])).expect("refined");
 //! assert!((hit.t as f64 - exact.t).abs() < 1e-2);
 //! # Ok::<(), limitray::Error>(())
 //! ```
