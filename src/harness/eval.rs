@@ -5,6 +5,7 @@ use super::rng::SplitMix64;
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
+use crate::patch::table::tree::{CORNER, UAX, VAX};
 use crate::patch::PatchTable;
 use crate::refine::{step, Level};
 use rayon::prelude::*;
@@ -35,12 +36,6 @@ impl Near {
 
 /// How close to an extraordinary corner [`Near::Ev`] queries lie: 2^-10 of the (sub-)face.
 pub const EV_DISTANCE: f64 = 1.0 / 1024.0;
-
-/// Corner `c` of the unit square and the unit axes from it along the face's edges (towards
-/// corner `c + 1` and corner `c − 1`).
-const CORNER: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-const UAX: [[f64; 2]; 4] = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
-const VAX: [[f64; 2]; 4] = [[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]];
 
 /// The extraordinary corners of every (sub-)face of `mesh` that is not a hole in `table`:
 /// `(face, k, corner)` with `corner` 0..4 in the (sub-)face's `(u, v)` (0 at `(0, 0)`, 1 at
@@ -209,21 +204,26 @@ mod tests {
         assert!(eval_queries(&table, 10, 1).is_err());
     }
 
-    #[test]
-    fn queries_near_extraordinary_corners() {
-        // A pentagon: the centre (level-1 face point, valence 5) is corner 2 of each
-        // sub-face; its own corners are boundary corners of valence 2 (regular).
+    /// One regular pentagon in the z = 0 plane.
+    fn pentagon() -> ControlMesh {
         let pos = (0..5)
             .map(|i| {
                 let a = i as f64 * std::f64::consts::TAU / 5.0;
                 [a.cos(), a.sin(), 0.0]
             })
             .collect();
-        let mesh = crate::mesh::MeshBuilder::new()
+        crate::mesh::MeshBuilder::new()
             .positions(pos)
             .faces(&[5], &[0, 1, 2, 3, 4])
             .build()
-            .unwrap();
+            .unwrap()
+    }
+
+    #[test]
+    fn queries_near_extraordinary_corners() {
+        // A pentagon: the centre (level-1 face point, valence 5) is corner 2 of each
+        // sub-face; its own corners are boundary corners of valence 2 (regular).
+        let mesh = pentagon();
         let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
         let corners = extraordinary_corners(&mesh, &table).unwrap();
         assert_eq!(corners, (0..5).map(|k| (0, k, 2)).collect::<Vec<_>>());
@@ -242,17 +242,7 @@ mod tests {
     #[test]
     fn eval_queries_pentagon_sub_faces() {
         // A single pentagon has five sub-faces; all should be drawn.
-        let pos = (0..5)
-            .map(|i| {
-                let a = i as f64 * std::f64::consts::TAU / 5.0;
-                [a.cos(), a.sin(), 0.0]
-            })
-            .collect();
-        let mesh = crate::mesh::MeshBuilder::new()
-            .positions(pos)
-            .faces(&[5], &[0, 1, 2, 3, 4])
-            .build()
-            .unwrap();
+        let mesh = pentagon();
         let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
         assert_eq!(table.sub_faces(0), 5);
         let q = eval_queries(&table, 500, 3).unwrap();

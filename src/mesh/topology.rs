@@ -210,16 +210,10 @@ impl Topology {
                 forward[e as usize] += 1;
             }
         }
-        // Non-manifold: more than two uses, two uses in the same direction, or a degenerate
-        // edge (both ends the same vertex, from a face that repeats a vertex) or an edge used
-        // twice by one face. OpenSubdiv tags such edges non-manifold too (and so makes them
-        // infinitely sharp); faces that repeat a vertex are kept, not refused.
+        // Non-manifold: more than two uses, two uses in the same direction, or `forced` (the
+        // degenerate and repeated edges of faces that repeat a vertex, see `new`).
         let mut edge_nonmanifold: Vec<bool> = (0..ne)
-            .map(|e| {
-                edge_face_counts[e] > 2
-                    || (edge_face_counts[e] == 2 && forward[e] != 1)
-                    || edge_verts[e][0] == edge_verts[e][1]
-            })
+            .map(|e| edge_face_counts[e] > 2 || (edge_face_counts[e] == 2 && forward[e] != 1))
             .collect();
         let edge_face_offsets = ranges(&edge_face_counts);
         let mut edge_faces = vec![0u32; nfv];
@@ -229,12 +223,6 @@ impl Topology {
                 let slot = &mut fill[e as usize];
                 edge_faces[*slot as usize] = fe_face[fe];
                 *slot += 1;
-            }
-        }
-        for e in 0..ne {
-            let fs = &edge_faces[edge_face_offsets[e] as usize..edge_face_offsets[e + 1] as usize];
-            if fs.len() == 2 && fs[0] == fs[1] {
-                edge_nonmanifold[e] = true;
             }
         }
         for &e in forced {

@@ -511,7 +511,6 @@ mod tests {
 
     /// Random points of face `f` near its corner `c`: at distance 2^-k, k up to 70.
     fn near_corner(rng: &mut SplitMix64, f: u32, c: usize) -> FaceCoord {
-        const CORNER: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
         let k = rng.below(71) as i32;
         let r = 2f64.powi(-k);
         let (s, t) = match rng.below(8) {
@@ -520,8 +519,7 @@ mod tests {
             2 => (0.0, r),
             _ => (r * rng.next_f64(), r * rng.next_f64()),
         };
-        const UAX: [[f64; 2]; 4] = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
-        const VAX: [[f64; 2]; 4] = [[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]];
+        use crate::patch::table::tree::{CORNER, UAX, VAX};
         let at = |i: usize| CORNER[c][i] + s * UAX[c][i] + t * VAX[c][i];
         FaceCoord::quad(f, at(0).clamp(0.0, 1.0), at(1).clamp(0.0, 1.0))
     }

@@ -128,44 +128,50 @@ impl StencilTable {
         }
         const CHUNK: usize = 1024;
         let (offsets, indices, weights) = (&self.offsets, &self.indices, &self.weights);
-        dst.par_chunks_mut(CHUNK * width)
-            .enumerate()
-            .for_each(|(c, out)| {
-                let first = c * CHUNK;
-                let rows = out.len() / width;
-                let offs = &offsets[first..first + rows + 1];
-                if width == 3 {
-                    // The common case (positions): fixed-width inner loop.
-                    for (k, o) in out.chunks_exact_mut(3).enumerate() {
-                        let (a, b) = (offs[k] as usize, offs[k + 1] as usize);
-                        let mut s = [0.0f64; 3];
-                        for (&i, &wt) in indices[a..b].iter().zip(&weights[a..b]) {
-                            let p = &src[i as usize * 3..i as usize * 3 + 3];
-                            s[0] += wt * p[0].to_f64();
-                            s[1] += wt * p[1].to_f64();
-                            s[2] += wt * p[2].to_f64();
-                        }
-                        o[0] = T::from_f64(s[0]);
-                        o[1] = T::from_f64(s[1]);
-                        o[2] = T::from_f64(s[2]);
-                    }
-                    return;
-                }
-                let mut sum = vec![0.0f64; width];
-                for (k, o) in out.chunks_exact_mut(width).enumerate() {
+        let fill = |c: usize, out: &mut [T]| {
+            let first = c * CHUNK;
+            let rows = out.len() / width;
+            let offs = &offsets[first..first + rows + 1];
+            if width == 3 {
+                // The common case (positions): fixed-width inner loop.
+                for (k, o) in out.chunks_exact_mut(3).enumerate() {
                     let (a, b) = (offs[k] as usize, offs[k + 1] as usize);
-                    sum.fill(0.0);
+                    let mut s = [0.0f64; 3];
                     for (&i, &wt) in indices[a..b].iter().zip(&weights[a..b]) {
-                        let p = &src[i as usize * width..i as usize * width + width];
-                        for (acc, &x) in sum.iter_mut().zip(p) {
-                            *acc += wt * x.to_f64();
-                        }
+                        let p = &src[i as usize * 3..i as usize * 3 + 3];
+                        s[0] += wt * p[0].to_f64();
+                        s[1] += wt * p[1].to_f64();
+                        s[2] += wt * p[2].to_f64();
                     }
-                    for (d, &x) in o.iter_mut().zip(sum.iter()) {
-                        *d = T::from_f64(x);
+                    o[0] = T::from_f64(s[0]);
+                    o[1] = T::from_f64(s[1]);
+                    o[2] = T::from_f64(s[2]);
+                }
+                return;
+            }
+            let mut sum = vec![0.0f64; width];
+            for (k, o) in out.chunks_exact_mut(width).enumerate() {
+                let (a, b) = (offs[k] as usize, offs[k + 1] as usize);
+                sum.fill(0.0);
+                for (&i, &wt) in indices[a..b].iter().zip(&weights[a..b]) {
+                    let p = &src[i as usize * width..i as usize * width + width];
+                    for (acc, &x) in sum.iter_mut().zip(p) {
+                        *acc += wt * x.to_f64();
                     }
                 }
-            });
+                for (d, &x) in o.iter_mut().zip(sum.iter()) {
+                    *d = T::from_f64(x);
+                }
+            }
+        };
+        if self.len() <= CHUNK {
+            // One chunk (a local neighbourhood's table): no thread hand-off.
+            fill(0, dst);
+        } else {
+            dst.par_chunks_mut(CHUNK * width)
+                .enumerate()
+                .for_each(|(c, out)| fill(c, out));
+        }
     }
 
     /// Applies the table to 3-D points.

@@ -97,24 +97,6 @@ fn eval_regular(kind: RegularKind, cps: &[Combo; 16], data: &[f64], s: f64, t: f
     }
 }
 
-/// `rows` applied to points of 3 values, serially (the tables are a two-ring's worth of rows,
-/// too small for threads); the same sums in the same order as [`StencilTable::apply`].
-fn apply_small(rows: &StencilTable, data: &[f64]) -> Vec<f64> {
-    let mut out = Vec::with_capacity(3 * rows.len());
-    for r in 0..rows.len() {
-        let (idx, w) = rows.row(r);
-        let mut p = [0.0f64; 3];
-        for (&i, &wt) in idx.iter().zip(w) {
-            let q = &data[3 * i as usize..3 * i as usize + 3];
-            p[0] += wt * q[0];
-            p[1] += wt * q[1];
-            p[2] += wt * q[2];
-        }
-        out.extend_from_slice(&p);
-    }
-    out
-}
-
 fn as_points(data: &[f64]) -> Vec<[f64; 3]> {
     data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
 }
@@ -153,7 +135,7 @@ impl PatchTable {
             }
             let (q, s2, t2) = descend(s, t);
             let child = node.kids[q].get_or_init(|| Box::new(node.child(q, self.method, sc)));
-            data = apply_small(&child.rows, &data);
+            data = child.rows.apply(&data, 3);
             node = child;
             frame = frame.child(q);
             s = s2;
