@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Evaluation cost near extraordinary vertices (issue 12): `limitray bench-eval --near
 # centre|ev` on scenes/meshes/blob.obj and on generated valence-n stars (n = 3, 5..12: the
-# disc of `limitray::mesh::generate::star(n, 4)`, written here as OBJ), one thread. Prints a
-# markdown table: evaluations per second at face centres and within 2^-10 of an
+# disc of `limitray::mesh::generate::star(n, 4)`, written by examples/star.rs), one thread.
+# Prints a markdown table: evaluations per second at face centres and within 2^-10 of an
 # extraordinary corner, and their cost ratio (ev / centre); each the best of RUNS (default 3)
 # runs.
 #
@@ -18,36 +18,10 @@ EV_SAMPLES="${2:-20000}"
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
 
-# The star of generate::star(n, r): centre, rays, then each sector's inner vertices.
-star() {
-    python3 - "$1" "$2" <<'PY'
-import math, sys
-n, r = int(sys.argv[1]), int(sys.argv[2])
-rays = 1 + n * r
-pos = [None] * (rays + n * r * r)
-def vid(i, a, b):
-    if a == 0 and b == 0: return 0
-    if b == 0: return 1 + i * r + (a - 1)
-    if a == 0: return 1 + ((i + 1) % n) * r + (b - 1)
-    return rays + i * r * r + (a - 1) * r + (b - 1)
-faces = []
-for i in range(n):
-    d0, d1 = math.tau * i / n, math.tau * ((i + 1) % n) / n
-    for a in range(r + 1):
-        for b in range(r + 1):
-            x = a * math.cos(d0) + b * math.cos(d1)
-            y = a * math.sin(d0) + b * math.sin(d1)
-            pos[vid(i, a, b)] = (x, y, 0.1 * math.sin(0.7 * x) * math.cos(0.5 * y))
-    for a in range(r):
-        for b in range(r):
-            faces.append((vid(i, a, b), vid(i, a + 1, b), vid(i, a + 1, b + 1), vid(i, a, b + 1)))
-print(f"# generate::star({n}, {r})")
-for p in pos:
-    print("v %.17g %.17g %.17g" % p)
-for f in faces:
-    print("f " + " ".join(str(v + 1) for v in f))
-PY
-}
+# The stars of generate::star(n, r), written by examples/star.rs.
+cargo build --quiet --release --no-default-features --example star --manifest-path "$ROOT/Cargo.toml"
+STAR="${CARGO_TARGET_DIR:-$ROOT/target}/release/examples/star"
+star() { "$STAR" "$1" "$2"; }
 
 MESHES=("$ROOT/scenes/meshes/blob.obj")
 for n in 3 5 6 7 8 9 10 11 12; do
