@@ -97,7 +97,6 @@ impl PatchTable {
                     level: depth as u8,
                     first_point: first,
                     end_cap: 0,
-                    cap_face: 0,
                     ..Patch::UNSET
                 },
             );
@@ -174,7 +173,6 @@ impl PatchTable {
                     level: depth as u8,
                     first_point: first,
                     end_cap: (self.end_caps.len() - 1) as u32,
-                    cap_face: 0,
                     ..Patch::UNSET
                 },
             );

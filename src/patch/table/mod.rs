@@ -95,8 +95,6 @@ pub struct Patch {
     pub first_point: u32,
     /// For end caps: index of the cap's own neighbourhood (its two-ring, cut out at build time).
     pub end_cap: u32,
-    /// For end caps: the face within that neighbourhood (always 0).
-    pub cap_face: u32,
     /// Base face.
     pub face: u32,
     /// Sub-face of the base face (0 for quads).
@@ -117,7 +115,6 @@ impl Patch {
         level: 0,
         first_point: 0,
         end_cap: 0,
-        cap_face: 0,
         face: 0,
         sub_face: 0,
         origin: [0.0; 2],
