@@ -26,6 +26,7 @@ pub mod dice;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
+pub mod exact;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod harness;
@@ -42,11 +43,11 @@ pub mod surface;
 pub mod threads;
 pub mod vec3;
 
-pub use bvh::exact::ExactHit;
 pub use bvh::{Hit, Ray, Ray64};
 pub use coord::FaceCoord;
 pub use dice::{DiceOptions, DiceRate, DicedMesh};
 pub use error::{Error, ErrorKind, Result};
+pub use exact::{ExactHit, ExactTrace, ExactTracer};
 pub use mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod};
 pub use patch::Sample;
 pub use surface::{Surface, SurfaceOptions, TracedSurface};

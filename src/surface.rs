@@ -24,17 +24,21 @@
 //! // Dice it into crack-free triangles and trace a ray from the centre: it always hits.
 //! let traced = surface.bvh(&DiceOptions { rate: DiceRate::Uniform(8), max_rate: 256 })?;
 //! let hit = traced.intersect(&Ray::new([0.0; 3], [0.3, 0.2, 1.0])).expect("closed surface");
-//! let exact = traced.intersect_exact(&Ray64::new([0.0; 3], [0.3, 0.2, 1.0])).expect("refined");
-//! assert!((hit.t as f64 - exact.t).abs() < 1e-2);
+//!
+//! // The reference intersector: the certified first hit on the exact limit surface, in f64,
+//! // whatever the dicing.
+//! let exact = surface.intersect_exact(&Ray64::new([0.0; 3], [0.3, 0.2, 1.0]))?;
+//! let x = exact.hit.expect("closed surface");
+//! assert!((hit.t as f64 - x.t).abs() < 1e-2 && x.err < 1e-12 && !x.grazing);
 //! # Ok::<(), limitray::Error>(())
 //! ```
 
-use crate::bvh::exact::{refine_hit, ExactHit};
 use crate::bvh::Ray64;
 use crate::bvh::{Hit, MeshBvh, Ray};
 use crate::coord::FaceCoord;
 use crate::dice::{dice, DiceOptions, DicedMesh};
 use crate::error::Result;
+use crate::exact::{ExactTrace, ExactTracer};
 use crate::mesh::obj::read_obj;
 use crate::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
 use crate::patch::{PatchOptions, PatchTable, Sample};
@@ -73,6 +77,8 @@ pub struct Surface {
     mesh: ControlMesh,
     table: Arc<PatchTable>,
     warnings: Vec<String>,
+    /// The reference intersector, built by the first exact query.
+    exact: std::sync::OnceLock<ExactTracer>,
 }
 
 impl Surface {
@@ -99,6 +105,7 @@ impl Surface {
             mesh,
             table: Arc::new(table),
             warnings,
+            exact: std::sync::OnceLock::new(),
         })
     }
 
@@ -160,20 +167,34 @@ impl Surface {
         dice(&self.table, &self.mesh, options)
     }
 
+    /// The reference intersector of the surface (built on first use, then kept): certified
+    /// first hits on the exact limit surface, independent of any dicing.
+    pub fn exact_tracer(&self) -> Result<&ExactTracer> {
+        if let Some(t) = self.exact.get() {
+            return Ok(t);
+        }
+        let t = ExactTracer::new(self.table.clone(), &self.mesh)?;
+        Ok(self.exact.get_or_init(|| t))
+    }
+
+    /// The first hit of `ray` (given in `f64`, `t ≥ 0`) on the exact limit surface, with its
+    /// error bound, from the reference intersector ([`crate::exact`]).
+    pub fn intersect_exact(&self, ray: &Ray64) -> Result<ExactTrace> {
+        Ok(self.exact_tracer()?.trace(ray))
+    }
+
     /// The diced surface under a watertight BVH, ready for ray queries.
     pub fn bvh(&self, options: &DiceOptions) -> Result<TracedSurface> {
         Ok(TracedSurface {
-            table: self.table.clone(),
             bvh: MeshBvh::build(self.dice(options)?),
         })
     }
 }
 
 /// A [`Surface`] diced and built into a BVH: watertight ray queries (no ray from inside a
-/// closed surface leaks), and hits refined onto the exact limit surface.
+/// closed surface leaks).
 #[derive(Debug)]
 pub struct TracedSurface {
-    table: Arc<PatchTable>,
     bvh: MeshBvh,
 }
 
@@ -196,13 +217,5 @@ impl TracedSurface {
     /// Closest hits of many rays, in parallel.
     pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
         self.bvh.intersect_batch(rays)
-    }
-
-    /// The closest diced hit of `ray`'s `f32` rounding, refined onto the exact limit surface
-    /// for `ray` itself (Newton in `f64`); `None` for a miss or a hit that cannot be refined
-    /// (grazing, or the exact point in a neighbouring face).
-    pub fn intersect_exact(&self, ray: &Ray64) -> Option<ExactHit> {
-        let hit = self.bvh.intersect(&ray.to_f32())?;
-        refine_hit(&self.table, ray, &hit)
     }
 }

@@ -162,11 +162,12 @@ fn line_tools_answer_every_line_and_name_bad_ones() {
     let out = String::from_utf8(o.stdout).unwrap();
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(lines.len(), 4, "{out}");
-    // `--exact` hits carry a tenth field: 1 refined, 0 kept as diced.
+    // `--exact` hits carry err, sharp and grazing after the normal.
     for i in [0, 3] {
         let f: Vec<&str> = lines[i].split_whitespace().collect();
-        assert_eq!((f[0], f.len()), ("hit", 10), "{}", lines[i]);
-        assert!(f[9] == "1" || f[9] == "0");
+        assert_eq!((f[0], f.len()), ("hit", 12), "{}", lines[i]);
+        assert!(f[9].parse::<f64>().unwrap() <= 1e-12, "{}", lines[i]);
+        assert_eq!((f[10], f[11]), ("0", "0"), "{}", lines[i]);
     }
     assert!(lines[1].starts_with("nan"));
     assert_eq!(lines[2], "miss");

@@ -140,3 +140,35 @@ fn accuracy_and_bench_print_json() {
     let bad = run(&["dice", &cube, "--rate", "0", "-o", "-"], "");
     assert_eq!(bad.status.code(), Some(2));
 }
+
+#[test]
+fn trace_exact_does_not_depend_on_the_dicing() {
+    // The reference intersector never looks at the diced mesh: rays near the silhouette (which
+    // a coarse dicing misses or hits wrongly) get the same answer at every rate, bit for bit.
+    let cube = scene("creased_cube.obj");
+    let mut input = String::new();
+    for i in 0..200 {
+        let y = -1.2 + 0.012 * i as f64;
+        input.push_str(&format!("-5 {y} 0.05 1 0.001 0.002\n"));
+    }
+    let answers: Vec<String> = ["1", "4", "64"]
+        .iter()
+        .map(|r| {
+            let o = run(&["trace", &cube, "--rate", r, "--exact"], &input);
+            assert!(o.status.success());
+            String::from_utf8(o.stdout).unwrap()
+        })
+        .collect();
+    assert_eq!(answers[0], answers[1]);
+    assert_eq!(answers[0], answers[2]);
+    let hits = answers[0].lines().filter(|l| l.starts_with("hit")).count();
+    assert!(hits > 20 && hits < 200, "{hits}");
+    // A diced trace at rate 1 answers some of these rays differently.
+    let diced = run(&["trace", &cube, "--rate", "1"], &input);
+    let diced_hits = String::from_utf8(diced.stdout)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("hit"))
+        .count();
+    assert_ne!(diced_hits, hits);
+}

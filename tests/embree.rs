@@ -563,7 +563,12 @@ fn cli_crosscheck_and_bench() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = String::from_utf8(out.stdout).unwrap();
-    for engine in ["limitray", "embree-triangles", "embree-subdiv"] {
+    for engine in [
+        "limitray",
+        "embree-triangles",
+        "embree-subdiv",
+        "limitray-exact",
+    ] {
         assert!(text.contains(engine), "{text}");
     }
     // Bad input: exit code 2 with a message naming the problem.

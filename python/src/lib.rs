@@ -5,7 +5,6 @@
 //! (`Python::detach`), and returns new arrays. Errors carry the library's messages (what the
 //! CLI prints after `error: `): `OSError` for files, `ValueError` for everything else.
 
-use limitray::bvh::exact::refine_hit;
 use limitray::bvh::{MeshBvh, Ray64};
 use limitray::dice::{dice, DiceOptions, DiceRate};
 use limitray::error::{Error, ErrorKind};
@@ -13,6 +12,7 @@ use limitray::mesh::obj::read_obj;
 use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
 use limitray::patch::{PatchOptions, PatchTable};
 use limitray::refine::Refiner;
+use limitray::exact::{ExactTrace, ExactTracer};
 use limitray::FaceCoord;
 use numpy::ndarray::Array2;
 use numpy::{
@@ -23,7 +23,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
 use std::path::Path;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The Python exception for a library error, with the library's message.
 fn py_err(e: Error) -> PyErr {
@@ -45,7 +45,9 @@ const MAX_RATE: u32 = 256;
 struct Surface {
     mesh: ControlMesh,
     options: Options,
-    table: PatchTable,
+    table: Arc<PatchTable>,
+    /// The reference intersector, built by the first exact query.
+    exact: OnceLock<ExactTracer>,
     max_level: usize,
     warnings: Vec<String>,
     /// BVHs of the diced surface, by uniform rate.
@@ -92,6 +94,14 @@ fn matrix<'py, T: numpy::Element>(
 }
 
 impl Surface {
+    fn exact_tracer(&self) -> Result<&ExactTracer, Error> {
+        if let Some(t) = self.exact.get() {
+            return Ok(t);
+        }
+        let t = ExactTracer::new(self.table.clone(), &self.mesh)?;
+        Ok(self.exact.get_or_init(|| t))
+    }
+
     fn bvh(&self, rate: u32) -> Result<Arc<MeshBvh>, Error> {
         let mut cache = self
             .bvhs
@@ -157,7 +167,8 @@ impl Surface {
                 warnings: mesh.warnings.clone(),
                 mesh,
                 options,
-                table,
+                table: Arc::new(table),
+                exact: OnceLock::new(),
                 max_level,
                 bvhs: Mutex::new(HashMap::new()),
             })
@@ -263,41 +274,45 @@ impl Surface {
         let d = directions.as_slice()?.to_vec();
         let n = shape[0];
         let res = py.detach(|| -> PyResult<TraceOut> {
-            // The rays as given (f64, for the exact intersector) and their f32 rounding (for
-            // the diced surface's BVH, like the CLI).
+            // The rays as given (f64, for the reference intersector) and their f32 rounding
+            // (for the diced surface's BVH, like the CLI).
             let mut rays64 = Vec::with_capacity(n);
             let mut rays = Vec::with_capacity(n);
             for i in 0..n {
                 let (oi, di) = (&o[3 * i..3 * i + 3], &d[3 * i..3 * i + 3]);
-                if let Some(x) = oi.iter().chain(di).find(|&&x| !(x as f32).is_finite()) {
+                let finite = |x: f64| if exact { x.is_finite() } else { (x as f32).is_finite() };
+                if let Some(x) = oi.iter().chain(di).find(|&&x| !finite(x)) {
                     return Err(usage(format!("ray {i}: invalid number '{x}'")));
                 }
                 let ray = Ray64::new([oi[0], oi[1], oi[2]], [di[0], di[1], di[2]]);
                 let rounded = ray.to_f32();
-                if rounded.dir == [0.0; 3] {
+                let zero = if exact { ray.dir == [0.0; 3] } else { rounded.dir == [0.0; 3] };
+                if zero {
                     return Err(usage(format!("ray {i}: ray direction is zero")));
                 }
                 rays64.push(ray);
                 rays.push(rounded);
             }
-            let bvh = self.bvh(rate).map_err(py_err)?;
-            let hits = bvh.intersect_batch(&rays);
             let mut out = TraceOut::with_capacity(n);
-            for (h, ray) in hits.iter().zip(&rays64) {
+            if exact {
+                let tracer = self.exact_tracer().map_err(py_err)?;
+                for x in tracer.trace_batch(&rays64) {
+                    out.push_exact(&x);
+                }
+                return Ok(out);
+            }
+            let bvh = self.bvh(rate).map_err(py_err)?;
+            for h in bvh.intersect_batch(&rays) {
                 match h {
                     None => out.miss(),
-                    Some(h) => match exact.then(|| refine_hit(&self.table, ray, h)).flatten() {
-                        Some(x) => out.push(x.t, x.face, x.k, x.u, x.v, x.n, true),
-                        None => out.push(
-                            h.t as f64,
-                            h.face,
-                            h.k,
-                            h.u as f64,
-                            h.v as f64,
-                            h.ns.map(|c| c as f64),
-                            false,
-                        ),
-                    },
+                    Some(h) => out.push(
+                        h.t as f64,
+                        h.face,
+                        h.k,
+                        h.u as f64,
+                        h.v as f64,
+                        h.ns.map(|c| c as f64),
+                    ),
                 }
             }
             Ok(out)
@@ -311,7 +326,9 @@ impl Surface {
         dict.set_item("v", res.v.into_pyarray(py))?;
         dict.set_item("n", matrix(py, n, 3, res.n))?;
         if exact {
-            dict.set_item("refined", res.refined.into_pyarray(py))?;
+            dict.set_item("err", res.err.into_pyarray(py))?;
+            dict.set_item("sharp", res.sharp.into_pyarray(py))?;
+            dict.set_item("grazing", res.grazing.into_pyarray(py))?;
         }
         Ok(dict)
     }
@@ -411,9 +428,13 @@ struct TraceOut {
     u: Vec<f64>,
     v: Vec<f64>,
     n: Vec<f64>,
-    /// With `exact`: the hit was refined onto the exact limit surface (false for misses and
-    /// for hits that keep the diced answer), as the CLI's tenth `trace --exact` field.
-    refined: Vec<bool>,
+    /// With `exact`: the error bound relative to the diagonal (the CLI's tenth `trace
+    /// --exact` field; for a grazing miss the distance of the undecided region, else NaN).
+    err: Vec<f64>,
+    /// With `exact`: the hit is on an infinitely sharp feature.
+    sharp: Vec<bool>,
+    /// With `exact`: undecided pieces within `err` of the ray (a grazing hit or miss).
+    grazing: Vec<bool>,
 }
 
 impl TraceOut {
@@ -426,7 +447,9 @@ impl TraceOut {
             u: Vec::with_capacity(n),
             v: Vec::with_capacity(n),
             n: Vec::with_capacity(3 * n),
-            refined: Vec::with_capacity(n),
+            err: Vec::with_capacity(n),
+            sharp: Vec::with_capacity(n),
+            grazing: Vec::with_capacity(n),
         }
     }
 
@@ -438,12 +461,27 @@ impl TraceOut {
         self.u.push(f64::NAN);
         self.v.push(f64::NAN);
         self.n.extend_from_slice(&[f64::NAN; 3]);
-        self.refined.push(false);
     }
 
-    fn push(&mut self, t: f64, face: u32, k: u32, u: f64, v: f64, n: [f64; 3], refined: bool) {
+    fn push_exact(&mut self, x: &ExactTrace) {
+        match &x.hit {
+            Some(h) => {
+                self.push(h.t, h.face, h.k, h.u, h.v, h.n);
+                self.err.push(h.err);
+                self.sharp.push(h.sharp);
+                self.grazing.push(h.grazing);
+            }
+            None => {
+                self.miss();
+                self.err.push(x.graze.unwrap_or(f64::NAN));
+                self.sharp.push(false);
+                self.grazing.push(x.graze.is_some());
+            }
+        }
+    }
+
+    fn push(&mut self, t: f64, face: u32, k: u32, u: f64, v: f64, n: [f64; 3]) {
         self.hit.push(true);
-        self.refined.push(refined);
         self.t.push(t);
         self.face.push(face as i64);
         self.k.push(k as i64);

@@ -1,9 +1,8 @@
 //! Ray queries against diced limit surfaces: an obvhs CWBVH per diced mesh ([`mesh`]) with
 //! the watertight ray/triangle test and conservative box tests ([`triangle`]), instances under
-//! a top-level hierarchy ([`scene`]), and refinement of a hit onto the exact limit surface
-//! ([`exact`]).
+//! a top-level hierarchy ([`scene`]). Exact hits on the limit surface itself come from the
+//! reference intersector, [`crate::exact`].
 
-pub mod exact;
 pub mod mesh;
 pub mod ray;
 pub mod scene;

@@ -1,10 +1,13 @@
-//! `limitray accuracy`: the distance of diced hits from the exact limit surface, per rate.
+//! `limitray accuracy`: the distance of diced hits from the reference intersector's exact first
+//! hits on the same rays, per rate.
 
 use super::args::{load, DiceArgs, RuleArgs};
-use super::dice::dice_mesh;
 use crate::bvh::MeshBvh;
+use crate::dice::dice;
 use crate::error::Result;
+use crate::exact::ExactTracer;
 use crate::mesh::ControlMesh;
+use crate::patch::PatchTable;
 use std::path::PathBuf;
 
 /// Arguments of `limitray accuracy`.
@@ -53,6 +56,12 @@ pub fn accuracy_table(
     seed: u64,
 ) -> Result<Vec<String>> {
     let diag = mesh.diagonal();
+    let table = std::sync::Arc::new(PatchTable::with_options(
+        mesh,
+        options,
+        args.patch_options(),
+    )?);
+    let exact = ExactTracer::new(table.clone(), mesh)?;
     let mut out = Vec::new();
     for &r in rates {
         let a = DiceArgs {
@@ -60,16 +69,24 @@ pub fn accuracy_table(
             edge_length: None,
             ..args.clone()
         };
-        let (table, d) = dice_mesh(mesh, options, &a)?;
+        if r > args.max_rate.max(1) {
+            eprintln!(
+                "warning: rate {r} is above --max-rate {}; {} segments per edge are used",
+                args.max_rate,
+                args.max_rate.max(1)
+            );
+        }
+        let d = dice(&table, mesh, &a.options())?;
         let tris = d.triangles.len();
         let bvh = MeshBvh::build(d);
-        let acc = crate::harness::probe::accuracy(&table, &bvh, rays, diag, seed);
+        let acc = crate::harness::probe::accuracy(&exact, &bvh, rays, seed);
         let v = serde_json::json!({
             "rate": r,
             "rate_used": r.min(args.max_rate.max(1)),
             "triangles": tris,
             "rays": acc.samples,
-            "unrefined": acc.unrefined,
+            "disagree": acc.disagree,
+            "grazing": acc.grazing,
             "max_surface_rel": significant(acc.max_surface / diag),
             "mean_surface_rel": significant(acc.mean_surface / diag),
             "max_param_rel": significant(acc.max_param / diag),

@@ -5,6 +5,7 @@ use crate::dice::{DiceOptions, DiceRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::obj::read_obj;
 use crate::mesh::{generate, BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use crate::patch::PatchOptions;
 use std::path::{Path, PathBuf};
 
 /// Boundary interpolation on the command line.
@@ -128,6 +129,14 @@ impl Default for DiceArgs {
 }
 
 impl DiceArgs {
+    /// The patch-table options these arguments ask for.
+    pub fn patch_options(&self) -> PatchOptions {
+        PatchOptions {
+            max_level: self.max_level,
+            ..PatchOptions::default()
+        }
+    }
+
     /// The dicing options these arguments ask for.
     pub fn options(&self) -> DiceOptions {
         DiceOptions {

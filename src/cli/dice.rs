@@ -5,7 +5,7 @@ use crate::dice::{dice, DicedMesh};
 use crate::error::Result;
 use crate::mesh::obj::ObjWriter;
 use crate::mesh::ControlMesh;
-use crate::patch::{PatchOptions, PatchTable};
+use crate::patch::PatchTable;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -37,14 +37,7 @@ pub fn dice_mesh(
     options: crate::mesh::Options,
     args: &DiceArgs,
 ) -> Result<(PatchTable, DicedMesh)> {
-    let table = PatchTable::with_options(
-        mesh,
-        options,
-        PatchOptions {
-            max_level: args.max_level,
-            ..PatchOptions::default()
-        },
-    )?;
+    let table = PatchTable::with_options(mesh, options, args.patch_options())?;
     if args.edge_length.is_none() && args.rate > args.max_rate.max(1) {
         eprintln!(
             "warning: rate {} is above --max-rate {}; {} segments per edge are used",

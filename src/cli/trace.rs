@@ -1,11 +1,12 @@
 //! `limitray trace`: line-oriented ray queries (`ox oy oz dx dy dz` in, `hit t face k u v nx ny
-//! nz` (plus a refined flag with `--exact`) or `miss` out) on the CPU or, with `--backend gpu`, on a Vulkan adapter.
+//! nz` or `miss` out) on the CPU or, with `--backend gpu`, on a Vulkan adapter; with `--exact`,
+//! the reference intersector's certified first hit on the exact limit surface, in `f64`.
 
 use super::args::{load, DiceArgs, RuleArgs};
 use super::dice::dice_mesh;
-use crate::bvh::exact::refine_hit;
 use crate::bvh::{MeshBvh, Ray, Ray64};
 use crate::error::{Error, ErrorKind, Result};
+use crate::exact::{ExactTrace, ExactTracer};
 use crate::patch::PatchTable;
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
@@ -41,7 +42,9 @@ pub struct TraceCmd {
     pub rules: RuleArgs,
     #[command(flatten)]
     pub dice: DiceArgs,
-    /// Refine each hit onto the exact limit surface (Newton, f64).
+    /// Trace the exact limit surface with the reference intersector (f64, certified first
+    /// hit, independent of the dicing options; CPU only): `hit t face k u v nx ny nz err
+    /// sharp grazing` with 17 significant digits, `miss`, or `miss graze ERR`.
     #[arg(long)]
     pub exact: bool,
     #[command(flatten)]
@@ -51,16 +54,35 @@ pub struct TraceCmd {
 /// Runs `limitray trace` on standard input and output.
 pub fn run(args: &TraceCmd) -> Result<()> {
     let m = load(&args.mesh)?;
-    let (table, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
-    let bvh = MeshBvh::build(d);
     let (input, output) = (std::io::stdin().lock(), std::io::stdout().lock());
+    if args.exact {
+        if args.backend.backend == Backend::Gpu {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "--exact runs the reference intersector on the CPU; drop --backend gpu",
+            ));
+        }
+        let table =
+            PatchTable::with_options(&m, args.rules.options(&m), args.dice.patch_options())?;
+        let tracer = ExactTracer::new(std::sync::Arc::new(table), &m)?;
+        return trace_exact(&tracer, input, output);
+    }
+    let (_table, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
+    let bvh = MeshBvh::build(d);
     match args.backend.backend {
-        Backend::Cpu => trace(&bvh, &table, args.exact, input, output),
+        Backend::Cpu => trace(&bvh, input, output),
         #[cfg(feature = "gpu")]
         Backend::Gpu => {
             let ctx = crate::gpu::GpuContext::new(args.backend.adapter.as_deref())?;
-            trace_with(&table, args.exact, input, output, |rays| {
-                crate::gpu::trace_mesh(&ctx, &bvh, rays, crate::gpu::TraceOptions::default())
+            trace_with(input, output, |rays| {
+                let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
+                let hits = crate::gpu::trace_mesh(
+                    &ctx,
+                    &bvh,
+                    &f32_rays,
+                    crate::gpu::TraceOptions::default(),
+                )?;
+                Ok(hits.iter().map(|h| diced_line(h.as_ref())).collect())
             })
         }
         #[cfg(not(feature = "gpu"))]
@@ -71,10 +93,10 @@ pub fn run(args: &TraceCmd) -> Result<()> {
     }
 }
 
-/// A ray line `ox oy oz dx dy dz`: its `f32` rounding (for the diced mesh's BVH; each number
-/// parsed to `f32` directly, so that it is the correctly rounded value) and the ray as given
-/// in `f64` (for the exact intersector). Every number must be finite in `f32`.
-fn parse_ray(line: &str) -> std::result::Result<(Ray, Ray64), String> {
+/// A ray line `ox oy oz dx dy dz` as given, in `f64`; unless `exact`, every number must also
+/// be finite in `f32` (the diced mesh's BVH traces the rounding, each number parsed to `f32`
+/// directly so that it is the correctly rounded value).
+fn parse_ray(line: &str, exact: bool) -> std::result::Result<(Ray, Ray64), String> {
     let toks: Vec<&str> = line.split_whitespace().collect();
     if toks.len() != 6 {
         return Err(format!(
@@ -86,14 +108,25 @@ fn parse_ray(line: &str) -> std::result::Result<(Ray, Ray64), String> {
     let mut x64 = [0f64; 6];
     for (i, t) in toks.iter().enumerate() {
         let bad = || format!("invalid number '{t}'");
-        x[i] = t
-            .parse::<f32>()
+        x64[i] = t
+            .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
             .ok_or_else(bad)?;
-        x64[i] = t.parse::<f64>().map_err(|_| bad())?;
+        if !exact {
+            x[i] = t
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(bad)?;
+        }
     }
-    if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
+    let zero = if exact {
+        x64[3] == 0.0 && x64[4] == 0.0 && x64[5] == 0.0
+    } else {
+        x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0
+    };
+    if zero {
         return Err("ray direction is zero".into());
     }
     Ok((
@@ -102,22 +135,64 @@ fn parse_ray(line: &str) -> std::result::Result<(Ray, Ray64), String> {
     ))
 }
 
+/// The output line of a diced hit or miss.
+fn diced_line(h: Option<&crate::bvh::Hit>) -> String {
+    match h {
+        None => "miss".into(),
+        Some(h) => format!(
+            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
+            h.t, h.face, h.k, h.u, h.v, h.ns[0], h.ns[1], h.ns[2]
+        ),
+    }
+}
+
+/// The output line of the reference intersector's answer: `hit t face k u v nx ny nz err
+/// sharp grazing` (reals with 17 significant digits, flags 0 or 1), `miss` (certain) or
+/// `miss graze ERR` (the ray comes within ERR of the surface, relative to the diagonal,
+/// where no crossing could be decided).
+pub fn exact_line(x: &ExactTrace) -> String {
+    match (&x.hit, x.graze) {
+        (Some(h), _) => format!(
+            "hit {:.16e} {} {} {:.16e} {:.16e} {:.16e} {:.16e} {:.16e} {:.3e} {} {}",
+            h.t,
+            h.face,
+            h.k,
+            h.u,
+            h.v,
+            h.n[0],
+            h.n[1],
+            h.n[2],
+            h.err,
+            h.sharp as u8,
+            h.grazing as u8
+        ),
+        (None, Some(g)) => format!("miss graze {g:.3e}"),
+        (None, None) => "miss".into(),
+    }
+}
+
 /// Reads rays from `input` and writes one line per input line: `hit t face k u v nx ny nz`
 /// (the normal is the limit-surface shading normal), `miss`, or nine `nan` fields for a bad
-/// line, invalid UTF-8 included (with `stdin:LINE: …` on stderr and an error at the end). With
-/// `exact`, each hit is refined onto the exact limit surface (`f64`, Newton) and that is
-/// printed, followed by a tenth field: `1` for a refined hit, `0` for a hit that could not be
-/// refined (the diced hit is printed then). Input is read and answered in batches of
-/// [`TRACE_BATCH`] lines, so memory does not grow with the input.
-pub fn trace(
-    bvh: &MeshBvh,
-    table: &PatchTable,
-    exact: bool,
-    input: impl BufRead,
-    output: impl Write,
-) -> Result<()> {
-    trace_with(table, exact, input, output, |rays| {
-        Ok(bvh.intersect_batch(rays))
+/// line, invalid UTF-8 included (with `stdin:LINE: …` on stderr and an error at the end).
+/// Input is read and answered in batches of [`TRACE_BATCH`] lines, so memory does not grow
+/// with the input.
+pub fn trace(bvh: &MeshBvh, input: impl BufRead, output: impl Write) -> Result<()> {
+    trace_with(input, output, |rays| {
+        let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
+        Ok(bvh
+            .intersect_batch(&f32_rays)
+            .iter()
+            .map(|h| diced_line(h.as_ref()))
+            .collect())
+    })
+}
+
+/// [`trace`] with the reference intersector: the rays as given in `f64`, each answered by
+/// [`exact_line`].
+pub fn trace_exact(tracer: &ExactTracer, input: impl BufRead, output: impl Write) -> Result<()> {
+    trace_lines(input, output, true, |rays| {
+        let r64: Vec<Ray64> = rays.iter().map(|r| r.1).collect();
+        Ok(tracer.trace_batch(&r64).iter().map(exact_line).collect())
     })
 }
 
@@ -127,14 +202,21 @@ pub const TRACE_BATCH: usize = 1 << 16;
 /// A parsed input line: blank, a ray (its `f32` rounding and itself), or why it is bad.
 type Parsed = std::result::Result<Option<(Ray, Ray64)>, String>;
 
-/// [`trace`] with the closest hits of the parsed rays computed by `hits` (one result per ray,
+/// [`trace`] with the answer lines of the parsed rays computed by `answer` (one line per ray,
 /// in order, called once per batch): the GPU backend plugs in here.
 pub fn trace_with(
-    table: &PatchTable,
-    exact: bool,
+    input: impl BufRead,
+    output: impl Write,
+    answer: impl FnMut(&[(Ray, Ray64)]) -> Result<Vec<String>>,
+) -> Result<()> {
+    trace_lines(input, output, false, answer)
+}
+
+fn trace_lines(
     input: impl BufRead,
     mut output: impl Write,
-    mut hits: impl FnMut(&[Ray]) -> Result<Vec<Option<crate::bvh::Hit>>>,
+    exact: bool,
+    mut lines_of: impl FnMut(&[(Ray, Ray64)]) -> Result<Vec<String>>,
 ) -> Result<()> {
     let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
     let mut bad = 0;
@@ -144,15 +226,11 @@ pub fn trace_with(
             .iter()
             .filter_map(|(_, p)| p.as_ref().ok().copied().flatten())
             .collect();
-        let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
-        let results = hits(&f32_rays)?;
+        let results = lines_of(&rays)?;
         if results.len() != rays.len() {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                "one hit result per ray expected",
-            ));
+            return Err(Error::new(ErrorKind::Usage, "one answer per ray expected"));
         }
-        let mut next = results.into_iter().zip(rays.iter());
+        let mut next = results.into_iter();
         for (number, p) in batch.drain(..) {
             match p {
                 Ok(None) => writeln!(output).map_err(io)?,
@@ -162,32 +240,8 @@ pub fn trace_with(
                     writeln!(output, "nan nan nan nan nan nan nan nan nan").map_err(io)?;
                 }
                 Ok(Some(_)) => {
-                    let (h, ray) = next.next().expect("one result per ray");
-                    let Some(h) = h else {
-                        writeln!(output, "miss").map_err(io)?;
-                        continue;
-                    };
-                    match exact.then(|| refine_hit(table, &ray.1, &h)) {
-                        Some(Some(x)) => writeln!(
-                            output,
-                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?} 1",
-                            x.t, x.face, x.k, x.u, x.v, x.n[0], x.n[1], x.n[2]
-                        ),
-                        unrefined => writeln!(
-                            output,
-                            "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}{}",
-                            h.t,
-                            h.face,
-                            h.k,
-                            h.u,
-                            h.v,
-                            h.ns[0],
-                            h.ns[1],
-                            h.ns[2],
-                            if unrefined.is_some() { " 0" } else { "" }
-                        ),
-                    }
-                    .map_err(io)?;
+                    let line = next.next().expect("one answer per ray");
+                    writeln!(output, "{line}").map_err(io)?;
                 }
             }
         }
@@ -198,7 +252,7 @@ pub fn trace_with(
         let parsed = match line {
             Err(m) => Err(m),
             Ok(l) if l.trim().is_empty() => Ok(None),
-            Ok(l) => parse_ray(&l).map(Some),
+            Ok(l) => parse_ray(&l, exact).map(Some),
         };
         batch.push((number, parsed));
         if batch.len() >= TRACE_BATCH {

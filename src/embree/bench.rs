@@ -14,9 +14,10 @@ use super::rays::{self, LeakTarget, TestRay};
 use super::subdiv::{check_rate, subdivision_scene};
 use super::triangles::triangle_scene;
 use super::{Device, Scene, SceneOptions};
-use crate::bvh::{MeshBvh, Ray};
+use crate::bvh::{MeshBvh, Ray, Ray64};
 use crate::dice::{dice, DiceOptions, DiceRate};
 use crate::error::{Error, ErrorKind, Result};
+use crate::exact::ExactTracer;
 use crate::mesh::ControlMesh;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -58,8 +59,9 @@ impl Default for BenchOptions {
 /// Results of one engine.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EngineResult {
-    /// `limitray`, `embree-triangles`, `embree-subdiv` or `embree-tri-robust` (the same
-    /// triangles with `RTC_SCENE_FLAG_ROBUST`).
+    /// `limitray`, `embree-triangles`, `embree-subdiv`, `embree-tri-robust` (the same
+    /// triangles with `RTC_SCENE_FLAG_ROBUST`) or `limitray-exact` (the reference intersector
+    /// on the exact limit surface, in f64, whatever the rate).
     pub name: &'static str,
     /// Median build time in seconds (for limitray: patch table + dicing + BVH; for Embree
     /// triangles: scene from the already diced triangles; for Embree subdivision: geometry
@@ -363,6 +365,34 @@ impl Engine for MeshBvh {
     }
 }
 
+impl Engine for ExactTracer {
+    fn hit(&self, r: &TestRay) -> bool {
+        self.trace(&Ray64::new(r.origin.map(f64::from), r.dir.map(f64::from)))
+            .hit
+            .is_some()
+    }
+}
+
+/// The reference intersector of `mesh`, built `reps` times: the last one, and the median
+/// seconds of its patch table and of its pieces and hierarchy.
+fn build_exact(mesh: &ControlMesh, reps: usize) -> Result<(ExactTracer, f64, f64)> {
+    let mut times = (Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..reps.max(1) {
+        drop(last.take());
+        let t0 = Instant::now();
+        let table = std::sync::Arc::new(embree_table(mesh)?);
+        let t1 = Instant::now();
+        let tracer = ExactTracer::new(table, mesh)?;
+        let t2 = Instant::now();
+        times.0.push((t1 - t0).as_secs_f64());
+        times.1.push((t2 - t1).as_secs_f64());
+        last = Some(tracer);
+    }
+    let tracer = last.expect("at least one repetition");
+    Ok((tracer, median(times.0), median(times.1)))
+}
+
 impl Engine for Scene {
     fn hit(&self, r: &TestRay) -> bool {
         self.intersect(r.origin, r.dir, 0.0, f32::INFINITY)
@@ -538,6 +568,23 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     }
     let triangles = built.bvh.diced.triangles.len();
     drop(built);
+    // The reference intersector on the same rays (it does not depend on the rate).
+    {
+        let (exact, table_s, pieces_s) = build_exact(mesh, opts.reps)?;
+        let (coh, coh_hits) = throughput(&exact, &coherent, opts.reps);
+        let (inc, inc_hits) = throughput(&exact, &incoherent, opts.reps);
+        results.push(EngineResult {
+            name: "limitray-exact",
+            build_s: table_s + pieces_s,
+            build_parts: vec![("patch_table", table_s), ("pieces", pieces_s)],
+            coherent_rays_per_s: coh,
+            incoherent_rays_per_s: inc,
+            coherent_hits: coh_hits,
+            incoherent_hits: inc_hits,
+            leaks: leaks(&exact, &leak_rays),
+            leaks_far: 0,
+        });
+    }
     drop((coherent, incoherent));
 
     // The translated copy, for the far leak count (built after the first is freed).
@@ -558,6 +605,11 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     ];
     for (r, engine) in results.iter_mut().zip(far_engines) {
         r.leaks_far = leaks(engine, &far_rays);
+    }
+    drop(far_built);
+    let (far_exact, _, _) = build_exact(&far, 1)?;
+    if let Some(r) = results.iter_mut().find(|r| r.name == "limitray-exact") {
+        r.leaks_far = leaks(&far_exact, &far_rays);
     }
     Ok(BenchReport {
         faces: mesh.num_faces(),

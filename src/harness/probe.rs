@@ -3,10 +3,10 @@
 //! surface. Used by the leak and accuracy tests, the benchmarks and `limitray accuracy`.
 
 use super::rng::SplitMix64;
-use crate::bvh::exact::refine_hit;
 use crate::bvh::{MeshBvh, Ray};
 use crate::coord::FaceCoord;
 use crate::dice::DicedMesh;
+use crate::exact::ExactTracer;
 use crate::patch::PatchTable;
 use crate::vec3::{cross, dot, norm, sub};
 use rayon::prelude::*;
@@ -151,11 +151,13 @@ pub fn count_leaks(bvh: &MeshBvh, rays: &[Ray]) -> LeakCount {
 /// Accuracy of diced hits against the exact limit surface.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Accuracy {
-    /// Rays that hit and whose exact intersection was found.
+    /// Rays that hit both the diced surface and the exact one (the reference intersector's
+    /// first hit).
     pub samples: usize,
-    /// Hits whose Newton refinement did not converge in the hit's face (grazing rays, or the
-    /// exact intersection lies in a neighbouring face).
-    pub unrefined: usize,
+    /// Rays that hit one of the two and miss the other (near silhouettes at coarse rates).
+    pub disagree: usize,
+    /// Rays whose exact answer is grazing (undecided pieces within `err` of the ray).
+    pub grazing: usize,
     /// Largest `|hit point − P(face,k,u,v)|` (the reported parameters' surface point).
     pub max_param: f64,
     /// Mean of the same.
@@ -200,8 +202,11 @@ pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f6
 }
 
 /// Measures [`Accuracy`] over `n` random rays aimed from outside at random diced triangles
-/// (deterministic in `seed`). `diag` scales the distance of the ray origins.
-pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u64) -> Accuracy {
+/// (deterministic in `seed`), against the reference intersector `exact`'s first hits on the
+/// same rays. The control mesh's diagonal scales the distance of the ray origins.
+pub fn accuracy(exact: &ExactTracer, bvh: &MeshBvh, n: usize, seed: u64) -> Accuracy {
+    let table = exact.table();
+    let diag = exact.diagonal();
     let d = &bvh.diced;
     if d.triangles.is_empty() {
         return Accuracy::default();
@@ -234,44 +239,53 @@ pub fn accuracy(table: &PatchTable, bvh: &MeshBvh, n: usize, diag: f64, seed: u6
             )
         })
         .collect();
-    let per: Vec<Option<(f64, f64, f64, bool)>> = rays
+    // Per ray: (diced hit's parameter error, distance along the ray to the exact first hit,
+    // bound ratio) when both hit; otherwise whether they disagree; and whether it grazes.
+    type Row = (Option<(f64, Option<(f64, f64)>)>, bool, bool);
+    let per: Vec<Row> = rays
         .par_iter()
         .map(|ray| {
-            let h = bvh.intersect(ray)?;
+            // The reference answers for the very ray the diced mesh traced (f32, widened).
+            let x = exact.trace(&ray.into());
+            let grazing = x.graze.is_some() || x.hit.is_some_and(|h| h.grazing);
+            let Some(h) = bvh.intersect(ray) else {
+                return (None, x.hit.is_some(), grazing);
+            };
             let o = ray.origin.map(|x| x as f64);
             let dir = ray.dir.map(|x| x as f64);
             let hp: [f64; 3] = std::array::from_fn(|k| o[k] + h.t as f64 * dir[k]);
-            let s = table
-                .eval(FaceCoord::new(h.face, h.k, h.u as f64, h.v as f64))
-                .ok()?;
+            let Ok(s) = table.eval(FaceCoord::new(h.face, h.k, h.u as f64, h.v as f64)) else {
+                return (None, false, grazing);
+            };
             let param_err = norm(sub(hp, s.p));
-            match refine_hit(table, &ray.into(), &h) {
-                Some(x) => {
-                    let along = (x.t - h.t as f64).abs() * norm(dir);
+            match x.hit {
+                Some(e) => {
+                    let along = (e.t - h.t as f64).abs() * norm(dir);
                     let bound = triangle_error_bound(table, d, h.triangle as usize);
                     // Rounding: f32 vertices, f32 t along a ray from an f32 origin.
                     let mag = hp.iter().chain(&o).fold(0.0f64, |m, v| m.max(v.abs()));
                     let slack = 8.0 * mag * f32::EPSILON as f64;
                     let ratio = param_err / (bound + slack);
-                    Some((param_err, along, ratio, true))
+                    (Some((param_err, Some((along, ratio)))), false, grazing)
                 }
-                None => Some((param_err, 0.0, 0.0, false)),
+                None => (Some((param_err, None)), true, grazing),
             }
         })
         .collect();
     let mut acc = Accuracy::default();
     let mut count_param = 0usize;
-    for (p, along, ratio, refined) in per.into_iter().flatten() {
+    for (both, disagree, grazing) in per {
+        acc.disagree += disagree as usize;
+        acc.grazing += grazing as usize;
+        let Some((p, exact_hit)) = both else { continue };
         count_param += 1;
         acc.max_param = acc.max_param.max(p);
         acc.mean_param += p;
-        if refined {
+        if let Some((along, ratio)) = exact_hit {
             acc.samples += 1;
             acc.max_surface = acc.max_surface.max(along);
             acc.mean_surface += along;
             acc.max_bound_ratio = acc.max_bound_ratio.max(ratio);
-        } else {
-            acc.unrefined += 1;
         }
     }
     acc.mean_param /= count_param.max(1) as f64;

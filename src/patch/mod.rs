@@ -4,6 +4,7 @@
 //! the patch table with exact evaluation ([`table`]), where quads at smooth
 //! extraordinary vertices are evaluated in constant time ([`stam`]).
 
+pub mod bezier;
 pub mod bspline;
 pub mod local;
 pub mod regular;

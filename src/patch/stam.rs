@@ -53,6 +53,9 @@ pub struct StamBasis {
     limit: Vec<f64>,
     /// The configuration's faces over the control points, as [`gather`] visits them.
     faces: Vec<LocalFace>,
+    /// `A`, row-major `size × size`: one step maps the control points to those of the child
+    /// quad at the extraordinary corner.
+    step: Vec<f64>,
 }
 
 /// Walks the quads around vertex `v`, starting with face `f`, crossing each face's edge that
@@ -281,11 +284,30 @@ impl StamBasis {
             weights,
             limit,
             faces,
+            step: a.concat(),
         }
     }
 
+    /// The control points of the child quad at the extraordinary corner (`A · cps`): the
+    /// corner's quarter of the patch is in their convex hull (every rule's weights are
+    /// non-negative).
+    pub(crate) fn corner_child(&self, cps: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let k = self.size;
+        (0..k)
+            .map(|r| {
+                let mut p = [0.0; 3];
+                for (&w, c) in self.step[r * k..(r + 1) * k].iter().zip(cps) {
+                    for i in 0..3 {
+                        p[i] += w * c[i];
+                    }
+                }
+                p
+            })
+            .collect()
+    }
+
     /// The 16 control points of the regular patch `q` (1..=3) at level `m` (1..=MAX_DEPTH).
-    fn grid(&self, m: usize, q: usize, cps: &[[f64; 3]]) -> ControlGrid {
+    pub(crate) fn grid(&self, m: usize, q: usize, cps: &[[f64; 3]]) -> ControlGrid {
         let k = self.size;
         let w = &self.weights[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k];
         #[cfg(target_arch = "x86_64")]

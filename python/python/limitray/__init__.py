@@ -105,13 +105,16 @@ class Surface:
         diced ``rate`` segments per face edge, as ``limitray trace``: the diced surface is
         traced with the rays rounded to float32 (like the CLI).
 
-        With ``exact``, each hit is refined onto the exact limit surface (f64 Newton) for the
-        rays as given in float64, not their float32 rounding; a hit that cannot be refined
-        keeps the diced hit. Returns ``{"hit": bool (N,), "t", "face",
+        With ``exact``, the reference intersector answers instead (as ``limitray trace
+        --exact``): the certified first hit on the exact limit surface for the rays as given
+        in float64, whatever ``rate``. Returns ``{"hit": bool (N,), "t", "face",
         "k", "u", "v": (N,), "n": (N, 3)}``: float64 values (diced hits are float32 values,
         widened exactly), face and k int64; a miss has t = inf, face = k = -1, u, v, n = nan.
-        With ``exact`` the dict also has ``"refined"``: bool (N,), true where Newton refined
-        the hit (the CLI's tenth ``trace --exact`` field). The BVH of each rate is built once
+        With ``exact`` the dict also has ``"err"``: float64 (N,), a bound on the distance of
+        ``o + t d`` from the exact surface relative to the bounding-box diagonal (NaN for
+        certain misses, the graze distance for grazing misses), ``"sharp"``: bool (N,), hits on
+        infinitely sharp features, and ``"grazing"``: bool (N,), rays that touch the surface
+        tangentially within ``err``. The BVH of each rate is built once
         and kept.
         """
         o = _floats("origins", origins, np.float64, shape=3)

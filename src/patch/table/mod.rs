@@ -21,6 +21,7 @@
 mod build;
 mod end_cap;
 mod eval;
+pub mod pieces;
 pub(crate) mod tree;
 
 use crate::mesh::{CreaseMethod, Options};
