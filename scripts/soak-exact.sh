@@ -3,8 +3,10 @@
 # (27 shapes) and N/6 per random creased mesh (150 meshes). N = 30000 traces about 1.56
 # million rays. Prints each shape's statistics and the totals.
 #
+# (The test profile is optimised, opt-level 3.)
+#
 # Usage: bash scripts/soak-exact.sh [N]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
-LIMITRAY_EXACT_RAYS="${1:-30000}" cargo test --release --test exact -- --nocapture --test-threads 1
+LIMITRAY_EXACT_RAYS="${1:-30000}" cargo test --test exact -- --nocapture --test-threads 1

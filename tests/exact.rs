@@ -158,8 +158,10 @@ fn check(name: &str, mesh: &ControlMesh, n: usize, seed: u64) -> Stats {
                 );
                 assert!(off <= h.err, "{name}: off {off:e} > err {:e}", h.err);
                 if *aimed {
+                    // At the aimed point itself t = 1 only to rounding / sin θ on shallow
+                    // rays (1e-12 seen); a different crossing beyond it would be farther.
                     assert!(
-                        h.t <= 1.0 + 1e-12,
+                        (h.t - 1.0) * len / diag <= 1e-9,
                         "{name}: hit beyond the aimed point {h:?}"
                     );
                 }
