@@ -94,6 +94,8 @@ pub struct ExactTracer {
     roots: Vec<Piece>,
     tree: PieceTree,
     diag: f64,
+    /// The largest absolute coordinate of the pieces' bounds.
+    extent: f64,
     /// Per (face, sub-face) slot: bits 0–3 the infinitely sharp sub-face edges
     /// (`v = 0`, `u = 1`, `v = 1`, `u = 0`), bits 4–7 the infinitely sharp corners
     /// (`(0,0)`, `(1,0)`, `(1,1)`, `(0,1)`).
@@ -255,6 +257,9 @@ impl ExactTracer {
             .collect();
         let boxes: Vec<Aabb> = roots.par_iter().map(piece_box).collect();
         let tree = PieceTree::build(&boxes);
+        let extent = boxes.iter().fold(0.0f64, |m, b| {
+            (0..3).fold(m, |m, a| m.max(b.0[a].abs()).max(b.1[a].abs()))
+        });
         let (level, _) = Level::base(mesh, &table.mesh_options)?;
         let topo = &level.topo;
         let inf = |s: f32| s >= SHARPNESS_INFINITE;
@@ -295,6 +300,7 @@ impl ExactTracer {
             roots,
             tree,
             diag: mesh.diagonal().max(f64::MIN_POSITIVE),
+            extent,
             sharp,
             slot_offsets,
         })
@@ -316,9 +322,11 @@ impl ExactTracer {
     }
 
     /// The thickness along a ray below which an undecided piece is settled by Newton's
-    /// method: 2^-44 (6e-14) of the diagonal, or the rounding of coordinates of size `scale`.
+    /// method: 2^-44 (6e-14) of the diagonal plus 1024 ulps of the larger of the ray origin's
+    /// coordinates (`scale`) and the surface's (above the rounding pads of the pieces' bounds,
+    /// at most 8 + (16 + 4·48) ulps, so that far from the origin a piece can get thin enough).
     pub fn tolerance(&self, scale: f64) -> f64 {
-        self.diag * 2f64.powi(-44) + 64.0 * f64::EPSILON * scale
+        self.diag * 2f64.powi(-44) + 1024.0 * f64::EPSILON * scale.max(self.extent)
     }
 
     /// Traces many rays in parallel.
