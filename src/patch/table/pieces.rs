@@ -98,23 +98,12 @@ impl Piece {
         ]
     }
 
-    /// The side of the piece's square in the (sub-)face's parameters.
-    pub fn param_size(&self) -> f64 {
-        self.frame.a[0].hypot(self.frame.a[1])
-    }
-
     /// The four quadrants of a Bézier piece.
     pub fn split_bezier(&self, g: &BezierGrid) -> [Piece; 4] {
         let kids = bezier::split(g);
         let half = |q: usize| -> Frame {
-            let c = [0.5 * CORNER[q][0], 0.5 * CORNER[q][1]];
             // Quadrants keep the axes (unlike the table's rotated children).
-            let c = match q {
-                1 => [0.5, 0.0],
-                2 => [0.5, 0.5],
-                3 => [0.0, 0.5],
-                _ => c,
-            };
+            let c = [0.5 * CORNER[q][0], 0.5 * CORNER[q][1]];
             let f = &self.frame;
             Frame {
                 o: [
