@@ -29,6 +29,7 @@ pub mod error;
 pub mod exact;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod grid;
 pub mod harness;
 pub mod io;
 pub mod lines;

@@ -128,6 +128,7 @@ fn one_triangle() -> limitray::dice::DicedMesh {
             level: 0,
             uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
         }],
+        grids: Vec::new(),
     }
 }
 

@@ -263,6 +263,15 @@ impl MeshBvh {
     }
 }
 
+impl super::ray::Intersect for MeshBvh {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        MeshBvh::intersect(self, ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        MeshBvh::occluded(self, ray)
+    }
+}
+
 /// Runs an obvhs build in a thread pool of its own whose threads have large stacks: obvhs's
 /// tree conversion recurses once per level of the binary hierarchy, which degenerate input
 /// (many coincident triangles, e.g. a thin shape far from the origin) makes thousands of

@@ -9,6 +9,6 @@ pub mod scene;
 pub mod triangle;
 
 pub use mesh::MeshBvh;
-pub use ray::{Hit, Ray, Ray64};
+pub use ray::{Hit, Intersect, Ray, Ray64};
 pub use scene::{SceneBvh, SceneHit};
 pub use triangle::intersect_triangle;

@@ -84,3 +84,13 @@ pub struct Hit {
     /// Subdivision level of the patch at the hit (0 = a base-face B-spline patch).
     pub level: u8,
 }
+
+/// Ray queries against one diced mesh in its own space: the grid core
+/// ([`crate::grid::GridMesh`]) and the triangle BVH ([`crate::bvh::MeshBvh`]) answer them
+/// alike (the same `t`, bit for bit).
+pub trait Intersect: Sync {
+    /// Closest hit of `ray` in `[tmin, tmax]`.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// True if anything is hit in `[tmin, tmax]`.
+    fn occluded(&self, ray: &Ray) -> bool;
+}

@@ -22,7 +22,7 @@ mod pattern;
 mod rates;
 
 pub use estimate::DiceEstimate;
-pub use pattern::{pattern, side_uv, Pattern};
+pub use pattern::{pattern, side_uv, GridPart, Pattern};
 pub use rates::{edge_rates, DiceRate, Rates, ScreenRate};
 
 use crate::coord::FaceCoord;
@@ -79,6 +79,23 @@ pub struct DicedMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Attributes of each triangle.
     pub tri_info: Vec<TriInfo>,
+    /// The regular grids among the triangles, one per domain that has one.
+    pub grids: Vec<GridRegion>,
+}
+
+/// A domain's regular grid of quads in a [`DicedMesh`]: `quads[0] × quads[1]` quads, row by
+/// row, each as two consecutive triangles `[a, b, c]`, `[a, c, d]` (`a` its corner of lowest
+/// `(u, v)`, counter-clockwise), starting at triangle `first_triangle`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridRegion {
+    /// Index of the first quad's first triangle.
+    pub first_triangle: u32,
+    /// Base face.
+    pub face: u32,
+    /// Sub-face (0 for quads).
+    pub k: u32,
+    /// Where the grid lies in the domain.
+    pub part: GridPart,
 }
 
 impl DicedMesh {
@@ -89,6 +106,7 @@ impl DicedMesh {
             + self.params.len() * std::mem::size_of::<FaceCoord>()
             + self.triangles.len() * 12
             + self.tri_info.len() * std::mem::size_of::<TriInfo>()
+            + self.grids.len() * std::mem::size_of::<GridRegion>()
     }
 
     /// Axis-aligned bounds of the vertices (`[max, min]` inverted when empty).
@@ -319,6 +337,14 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     }
     for part in parts {
         let base = out.positions.len() as u32;
+        if let Some(g) = part.grid {
+            out.grids.push(GridRegion {
+                first_triangle: out.triangles.len() as u32,
+                face: part.face,
+                k: part.k,
+                part: g,
+            });
+        }
         for p in &part.points {
             out.positions.push(p.p);
             out.normals.push(p.n);
@@ -348,6 +374,9 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
 const LOCAL: u32 = 1 << 31;
 
 struct DomainOut {
+    face: u32,
+    k: u32,
+    grid: Option<GridPart>,
     points: Vec<Point>,
     triangles: Vec<[u32; 3]>,
     tri_info: Vec<TriInfo>,
@@ -445,6 +474,9 @@ impl DomainCtx<'_> {
         let pat = cache.entry(rates).or_insert_with(|| pattern(rates));
         let ring = pat.ring_len();
         let mut out = DomainOut {
+            face: f as u32,
+            k: k as u32,
+            grid: pat.grid,
             points: Vec::with_capacity(pat.interior.len()),
             triangles: Vec::with_capacity(pat.triangles.len()),
             tri_info: Vec::with_capacity(pat.triangles.len()),

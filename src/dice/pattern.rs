@@ -18,8 +18,11 @@ pub struct Pattern {
     pub rates: [u32; 4],
     /// `(u, v)` of the interior points, numbered after the ring.
     pub interior: Vec<[f64; 2]>,
-    /// Counter-clockwise triangles (in `(u, v)`, hence as the control face).
+    /// Counter-clockwise triangles (in `(u, v)`, hence as the control face): the grid's
+    /// quads first (see [`pattern`]), then the zippers.
     pub triangles: Vec<[u32; 3]>,
+    /// Where the grid quads lie (`None` if the pattern has none).
+    pub grid: Option<GridPart>,
 }
 
 impl Pattern {
@@ -62,7 +65,26 @@ pub fn side_uv(s: usize, t: f64) -> [f64; 2] {
     }
 }
 
+/// The regular part of a [`Pattern`]: a block of grid quads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridPart {
+    /// Grid size of the whole domain, `(nu, nv)`: point `(i, j)` is at `(i/nu, j/nv)`.
+    pub n: [u32; 2],
+    /// First column and row of the block's points.
+    pub origin: [u32; 2],
+    /// Quads across and up.
+    pub quads: [u32; 2],
+}
+
 /// Builds the pattern for side rates `rates` (each at least 1).
+///
+/// A side whose rate equals the grid's count in its direction (`nu` for sides 0 and 2, `nv`
+/// for 1 and 3) is *matched*: its points are the grid's outer row or column. The grid's quads
+/// reach every matched side; an unmatched side is zipped to the grid's first row or column
+/// inside it. With uniform rates every side is matched and the domain is one grid of
+/// `nu × nv` quads. The grid quads come first in [`Pattern::triangles`], row by row from
+/// `v = 0`, each quad `(a, b, c, d)` (counter-clockwise from its lower-left corner) as the
+/// triangles `[a, b, c]` and `[a, c, d]`; [`Pattern::grid`] says where they lie.
 pub fn pattern(rates: [u32; 4]) -> Pattern {
     assert!(rates.iter().all(|&r| r >= 1), "side rates must be positive");
     let nu = rates[0].max(rates[2]);
@@ -71,41 +93,75 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
         rates,
         interior: Vec::new(),
         triangles: Vec::new(),
+        grid: None,
     };
+    let matched = [
+        rates[0] == nu,
+        rates[1] == nv,
+        rates[2] == nu,
+        rates[3] == nv,
+    ];
     let side = |p: &Pattern, s: usize| -> Vec<u32> {
         (0..=rates[s]).map(|j| p.ring_index(s, j)).collect()
     };
-    if nu >= 2 && nv >= 2 {
+    let all = matched.iter().all(|&m| m);
+    if all || (nu >= 2 && nv >= 2) {
         let n = p.ring_len() as u32;
-        let (iu, iv) = (nu - 1, nv - 1);
+        let iu = nu.saturating_sub(1);
         for j in 1..nv {
             for i in 1..nu {
                 p.interior
                     .push([i as f64 / nu as f64, j as f64 / nv as f64]);
             }
         }
-        let inner = |i: u32, j: u32| n + (j - 1) * iu + (i - 1);
-        for j in 1..nv - 1 {
-            for i in 1..nu - 1 {
-                let (a, b, c, d) = (
-                    inner(i, j),
-                    inner(i + 1, j),
-                    inner(i + 1, j + 1),
-                    inner(i, j + 1),
+        // Index of grid point (i, j): a ring point on the boundary, else an interior one.
+        let point = |p: &Pattern, i: u32, j: u32| -> u32 {
+            if j == 0 {
+                p.ring_index(0, if i == nu { rates[0] } else { i })
+            } else if i == nu {
+                p.ring_index(1, if j == nv { rates[1] } else { j })
+            } else if j == nv {
+                p.ring_index(2, if i == 0 { rates[2] } else { nu - i })
+            } else if i == 0 {
+                p.ring_index(3, nv - j)
+            } else {
+                n + (j - 1) * iu + (i - 1)
+            }
+        };
+        let a = matched.map(|m| u32::from(!m));
+        let (c0, c1, r0, r1) = (a[3], nu - a[1], a[0], nv - a[2]);
+        for j in r0..r1 {
+            for i in c0..c1 {
+                let (qa, qb, qc, qd) = (
+                    point(&p, i, j),
+                    point(&p, i + 1, j),
+                    point(&p, i + 1, j + 1),
+                    point(&p, i, j + 1),
                 );
-                p.triangles.push([a, b, c]);
-                p.triangles.push([a, c, d]);
+                p.triangles.push([qa, qb, qc]);
+                p.triangles.push([qa, qc, qd]);
             }
         }
-        // Inner ring sides, running the same way as the outer sides.
-        let bottom: Vec<u32> = (1..=iu).map(|i| inner(i, 1)).collect();
-        let right: Vec<u32> = (1..=iv).map(|j| inner(iu, j)).collect();
-        let top: Vec<u32> = (1..=iu).rev().map(|i| inner(i, iv)).collect();
-        let left: Vec<u32> = (1..=iv).rev().map(|j| inner(1, j)).collect();
-        for (s, inner_side) in [bottom, right, top, left].into_iter().enumerate() {
-            let outer = side(&p, s);
-            let tris = zip(&p, s, &outer, &inner_side);
-            p.triangles.extend(tris);
+        if c1 > c0 && r1 > r0 {
+            p.grid = Some(GridPart {
+                n: [nu, nv],
+                origin: [c0, r0],
+                quads: [c1 - c0, r1 - r0],
+            });
+        }
+        // The grid's outer rows and columns, running the same way as the sides.
+        let inner: [Vec<u32>; 4] = [
+            (c0..=c1).map(|i| point(&p, i, r0)).collect(),
+            (r0..=r1).map(|j| point(&p, c1, j)).collect(),
+            (c0..=c1).rev().map(|i| point(&p, i, r1)).collect(),
+            (r0..=r1).rev().map(|j| point(&p, c0, j)).collect(),
+        ];
+        for (s, inner_side) in inner.into_iter().enumerate() {
+            if !matched[s] {
+                let outer = side(&p, s);
+                let tris = zip(&p, s, &outer, &inner_side);
+                p.triangles.extend(tris);
+            }
         }
     } else if nu >= 2 {
         // One row: zip side 0 with side 2 reversed.
@@ -114,15 +170,12 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
         top.reverse();
         let tris = zip(&p, 0, &bottom, &top);
         p.triangles.extend(tris);
-    } else if nv >= 2 {
+    } else {
         let right = side(&p, 1);
         let mut left = side(&p, 3);
         left.reverse();
         let tris = zip(&p, 1, &right, &left);
         p.triangles.extend(tris);
-    } else {
-        p.triangles.push([0, 1, 2]);
-        p.triangles.push([0, 2, 3]);
     }
     p
 }
@@ -215,6 +268,51 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The grid quads come first, row by row, at the grid points they claim to be at; equal
+    /// rates give one grid and no zipper, and matched sides reach the grid.
+    #[test]
+    fn grid_part_is_where_it_says() {
+        for rates in [
+            [4, 4, 4, 4],
+            [3, 5, 3, 5],
+            [4, 2, 4, 4],
+            [2, 4, 3, 1],
+            [1, 6, 1, 6],
+            [1, 1, 1, 1],
+        ] {
+            let p = pattern(rates);
+            let g = p.grid.expect("grid");
+            let [nu, nv] = g.n;
+            for qj in 0..g.quads[1] {
+                for qi in 0..g.quads[0] {
+                    let q = (qj * g.quads[0] + qi) as usize;
+                    let (i, j) = ((g.origin[0] + qi) as f64, (g.origin[1] + qj) as f64);
+                    let at = |x: u32, du: f64, dv: f64| {
+                        let uv = p.uv(x as usize);
+                        assert_eq!(
+                            uv,
+                            [(i + du) / nu as f64, (j + dv) / nv as f64],
+                            "{rates:?}"
+                        );
+                    };
+                    let [a, b, c] = p.triangles[2 * q];
+                    let [a2, c2, d] = p.triangles[2 * q + 1];
+                    assert_eq!((a, c), (a2, c2));
+                    at(a, 0.0, 0.0);
+                    at(b, 1.0, 0.0);
+                    at(c, 1.0, 1.0);
+                    at(d, 0.0, 1.0);
+                }
+            }
+            let grid_tris = 2 * (g.quads[0] * g.quads[1]) as usize;
+            if rates[0] == rates[2] && rates[1] == rates[3] {
+                assert_eq!(p.triangles.len(), grid_tris, "{rates:?}");
+            }
+        }
+        assert_eq!(pattern([4, 2, 4, 4]).grid.unwrap().origin, [0, 0]);
+        assert_eq!(pattern([4, 2, 4, 4]).grid.unwrap().quads, [3, 4]);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! surface. Used by the leak and accuracy tests, the benchmarks and `limitray accuracy`.
 
 use super::rng::SplitMix64;
-use crate::bvh::{MeshBvh, Ray};
+use crate::bvh::{Intersect, MeshBvh, Ray};
 use crate::coord::FaceCoord;
 use crate::dice::DicedMesh;
 use crate::exact::ExactTracer;
@@ -130,7 +130,7 @@ pub struct LeakCount {
 }
 
 /// Casts `rays` (all from inside a closed mesh) with both query kinds and counts misses.
-pub fn count_leaks(bvh: &MeshBvh, rays: &[Ray]) -> LeakCount {
+pub fn count_leaks<T: Intersect + ?Sized>(bvh: &T, rays: &[Ray]) -> LeakCount {
     let (missed, missed_any) = rays
         .par_iter()
         .with_min_len(1024)

@@ -1,0 +1,569 @@
+//! The grid tracing core: a diced limit surface as grid blocks under one top-level BVH.
+//!
+//! Each diced domain's regular grid ([`crate::dice::GridRegion`]) is cut into blocks of at
+//! most 8×8 quads ([`block`]). A block stores its vertices once, as `f32` planes, with
+//! octahedral normals; its hierarchy is implicit (quadrants, then 2×2-quad windows, boxes in
+//! [`node::Box4`]), and its leaf test runs on the eight triangles of a window at once
+//! ([`window`]). The triangles outside the grids (zippers between different rates, tiny
+//! domains) are *loose* triangles with their own records. An obvhs CWBVH over blocks and loose
+//! triangles is the top level, its boxes made exact and conservative as in
+//! [`crate::bvh::mesh`].
+//!
+//! The vertices are the diced mesh's `f32` points, copied bit for bit: a vertex on a shared
+//! edge has the same bits in every block and loose triangle that holds it, and every triangle
+//! is tested with the same watertight test as [`crate::bvh::MeshBvh`] on the same corners in
+//! the same order. Hits and `t` are therefore those of the triangle BVH; on equal `t` the
+//! lowest triangle id wins (independent of traversal order).
+
+pub mod block;
+pub mod node;
+pub mod window;
+
+use crate::bvh::mesh::{make_conservative, normalize, walk, Prefetch, WideBoxes};
+use crate::bvh::ray::{Hit, Ray};
+use crate::bvh::triangle::{intersect_prepared, PreparedRay};
+use crate::dice::{DicedMesh, GridRegion};
+use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK};
+use glam::Vec3A;
+use node::{front_to_back, test4, Box4};
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::CwBvh;
+use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
+use rayon::prelude::*;
+use window::{lane_mask, Window};
+
+/// A triangle outside the grids, with everything its hits need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Loose {
+    /// Corners.
+    pub p: [[f32; 3]; 3],
+    /// Octahedral normals of the corners.
+    pub n: [u32; 3],
+    /// `(u, v)` of the corners.
+    pub uv: [[f32; 2]; 3],
+    /// Id in the diced mesh.
+    pub id: u32,
+    /// Base face.
+    pub face: u32,
+    /// Sub-face.
+    pub k: u32,
+    /// Subdivision level at its centroid.
+    pub level: u8,
+}
+
+/// A diced limit surface as grid blocks and loose triangles under a top-level BVH.
+#[derive(Clone, Debug, Default)]
+pub struct GridMesh {
+    /// Block headers.
+    pub blocks: Vec<Block>,
+    /// Vertex coordinates of all blocks (per block: `x`, `y`, `z` planes).
+    pub coords: Vec<f32>,
+    /// Octahedral vertex normals of all blocks.
+    pub normals: Vec<u32>,
+    /// Box nodes of all blocks.
+    pub boxes: Vec<Box4>,
+    /// Per-triangle subdivision levels of all blocks.
+    pub levels: Vec<u8>,
+    /// Triangles outside the grids.
+    pub loose: Vec<Loose>,
+    /// Top level over blocks (primitives `0..blocks.len()`) then loose triangles.
+    pub top: CwBvh,
+    /// Exact child boxes of the top-level nodes.
+    pub top_boxes: Vec<WideBoxes>,
+    /// Top-level leaf order → primitive.
+    pub top_index: Vec<u32>,
+    /// Levels of the top-level hierarchy.
+    pub depth: usize,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Bounds of all vertices (`[min, max]`; inverted when empty).
+    pub bounds: [[f32; 3]; 2],
+}
+
+/// Where a hit was found.
+#[derive(Clone, Copy, Debug)]
+enum Found {
+    /// Block, quad `(x, y)`, half.
+    Grid(u32, u8, u8, u8),
+    /// Loose triangle.
+    Loose(u32),
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Best {
+    at: Found,
+    id: u32,
+    t: f32,
+    b1: f32,
+    b2: f32,
+}
+
+struct PrimBox([[f32; 3]; 2]);
+
+impl Boundable for PrimBox {
+    fn aabb(&self) -> Aabb {
+        Aabb::new(Vec3A::from(self.0[0]), Vec3A::from(self.0[1]))
+    }
+}
+
+/// One block's data before it is placed.
+struct BlockData {
+    header: Block,
+    coords: Vec<f32>,
+    normals: Vec<u32>,
+    boxes: Vec<Box4>,
+    levels: Vec<u8>,
+    bounds: [[f32; 3]; 2],
+}
+
+/// Splits `n` quads into runs of at most [`BLOCK`], as even as possible, even lengths first.
+fn runs(n: usize) -> Vec<(usize, usize)> {
+    let count = n.div_ceil(BLOCK);
+    let mut out = Vec::with_capacity(count);
+    let mut start = 0;
+    for i in 0..count {
+        let left = n - start;
+        let parts = count - i;
+        let mut len = left.div_ceil(parts);
+        if len % 2 == 1 && len < left && len < BLOCK {
+            len += 1;
+        }
+        out.push((start, len.min(left)));
+        start += len.min(left);
+    }
+    out
+}
+
+fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
+    let [qc, qr] = g.part.quads.map(|x| x as usize);
+    let tri = |x: usize, y: usize, h: usize| -> usize {
+        g.first_triangle as usize + 2 * (y * qc + x) + h
+    };
+    // Vertex id of grid vertex (x, y) of the region.
+    let vertex = |x: usize, y: usize| -> usize {
+        let (qx, qy) = (x.min(qc - 1), y.min(qr - 1));
+        let t0 = d.triangles[tri(qx, qy, 0)];
+        let t1 = d.triangles[tri(qx, qy, 1)];
+        (match (x > qx, y > qy) {
+            (false, false) => t0[0],
+            (true, false) => t0[1],
+            (true, true) => t0[2],
+            (false, true) => t1[2],
+        }) as usize
+    };
+    let mut out = Vec::new();
+    for &(y0, rows) in &runs(qr) {
+        for &(x0, cols) in &runs(qc) {
+            let header = Block {
+                tri0: tri(x0, y0, 0) as u32,
+                tri_stride: 2 * qc as u32,
+                face: g.face,
+                k: g.k,
+                ij: [g.part.origin[0] + x0 as u32, g.part.origin[1] + y0 as u32],
+                n: g.part.n,
+                cols: cols as u8,
+                rows: rows as u8,
+                ..Block::default()
+            };
+            let nv = header.num_vertices();
+            let mut coords = vec![0f32; 3 * nv];
+            let mut normals = Vec::with_capacity(nv);
+            let mut bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+            for y in 0..=rows {
+                for x in 0..=cols {
+                    let v = vertex(x0 + x, y0 + y);
+                    let p = d.positions[v];
+                    let i = y * (cols + 1) + x;
+                    for a in 0..3 {
+                        coords[a * nv + i] = p[a];
+                        bounds[0][a] = bounds[0][a].min(p[a]);
+                        bounds[1][a] = bounds[1][a].max(p[a]);
+                    }
+                    normals.push(oct_encode(d.normals[v]));
+                }
+            }
+            let boxes = block_boxes(&header, |x, y| {
+                let i = y * (cols + 1) + x;
+                [coords[i], coords[nv + i], coords[2 * nv + i]]
+            });
+            let mut levels = Vec::with_capacity(2 * cols * rows);
+            for y in 0..rows {
+                for x in 0..cols {
+                    for h in 0..2 {
+                        levels.push(d.tri_info[tri(x0 + x, y0 + y, h)].level);
+                    }
+                }
+            }
+            out.push(BlockData {
+                header,
+                coords,
+                normals,
+                boxes,
+                levels,
+                bounds,
+            });
+        }
+    }
+    out
+}
+
+impl GridMesh {
+    /// Builds the grid mesh of `d`; the diced mesh is not kept.
+    pub fn build(d: &DicedMesh) -> GridMesh {
+        let data: Vec<Vec<BlockData>> = d
+            .grids
+            .par_iter()
+            .filter(|g| g.part.quads[0] > 0 && g.part.quads[1] > 0)
+            .map(|g| region_blocks(d, g))
+            .collect();
+        let mut covered = vec![false; d.triangles.len()];
+        for g in &d.grids {
+            let n = 2 * (g.part.quads[0] * g.part.quads[1]) as usize;
+            covered[g.first_triangle as usize..g.first_triangle as usize + n].fill(true);
+        }
+        let mut m = GridMesh {
+            triangles: d.triangles.len(),
+            bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
+            ..GridMesh::default()
+        };
+        let nblocks: usize = data.iter().map(|v| v.len()).sum();
+        m.blocks.reserve(nblocks);
+        let mut prim_boxes: Vec<PrimBox> = Vec::with_capacity(nblocks);
+        for b in data.into_iter().flatten() {
+            let mut h = b.header;
+            h.vert = m.coords.len() as u32;
+            h.normal = m.normals.len() as u32;
+            h.boxes = m.boxes.len() as u32;
+            h.level = m.levels.len() as u32;
+            m.coords.extend_from_slice(&b.coords);
+            m.normals.extend_from_slice(&b.normals);
+            m.boxes.extend_from_slice(&b.boxes);
+            m.levels.extend_from_slice(&b.levels);
+            m.blocks.push(h);
+            prim_boxes.push(PrimBox(b.bounds));
+        }
+        for (i, t) in d.triangles.iter().enumerate() {
+            if covered[i] {
+                continue;
+            }
+            let info = &d.tri_info[i];
+            let p = t.map(|v| d.positions[v as usize]);
+            let mut b = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+            for q in p {
+                for a in 0..3 {
+                    b[0][a] = b[0][a].min(q[a]);
+                    b[1][a] = b[1][a].max(q[a]);
+                }
+            }
+            prim_boxes.push(PrimBox(b));
+            m.loose.push(Loose {
+                p,
+                n: t.map(|v| oct_encode(d.normals[v as usize])),
+                uv: info.uv,
+                id: i as u32,
+                face: info.face,
+                k: info.k,
+                level: info.level,
+            });
+        }
+        for b in &prim_boxes {
+            for a in 0..3 {
+                m.bounds[0][a] = m.bounds[0][a].min(b.0[0][a]);
+                m.bounds[1][a] = m.bounds[1][a].max(b.0[1][a]);
+            }
+        }
+        if prim_boxes.is_empty() {
+            return m;
+        }
+        let mut params = BvhBuildParams::medium_build();
+        params.pre_split = false;
+        params.max_prims_per_leaf = 1;
+        let mut top = crate::bvh::mesh::build_deep(|| {
+            build_cwbvh(&prim_boxes, params, &mut std::time::Duration::default())
+        });
+        m.top_index = top.primitive_indices.clone();
+        let corners: Vec<[[f32; 3]; 3]> = m
+            .top_index
+            .iter()
+            .map(|&i| {
+                let b = prim_boxes[i as usize].0;
+                [b[0], b[1], b[1]]
+            })
+            .collect();
+        let (_, boxes, depth) = make_conservative(&mut top, &corners);
+        m.top_boxes = boxes;
+        m.depth = depth;
+        m.top = top;
+        m
+    }
+
+    /// Memory of everything the queries read, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.blocks.len() * std::mem::size_of::<Block>()
+            + self.coords.len() * 4
+            + self.normals.len() * 4
+            + self.boxes.len() * std::mem::size_of::<Box4>()
+            + self.levels.len()
+            + self.loose.len() * std::mem::size_of::<Loose>()
+            + self.top.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.top_boxes.len() * std::mem::size_of::<WideBoxes>()
+            + self.top_index.len() * 4
+    }
+
+    /// Bounds of the mesh.
+    pub fn bounds(&self) -> [[f32; 3]; 2] {
+        self.bounds
+    }
+
+    /// The nine vertices of window `(wx, wy)` of block `b` (clamped to the block: vertices of
+    /// absent quads repeat present ones) and its lanes.
+    #[inline(always)]
+    fn window(&self, b: &Block, wx: usize, wy: usize) -> (Window, u32) {
+        let (cols, rows) = (b.cols as usize, b.rows as usize);
+        let nv = b.num_vertices();
+        let base = b.vert as usize;
+        let c = &self.coords[base..base + 3 * nv];
+        let mut w = [[0f32; 9]; 3];
+        for y in 0..3 {
+            let yy = (2 * wy + y).min(rows);
+            for x in 0..3 {
+                let i = yy * (cols + 1) + (2 * wx + x).min(cols);
+                w[0][3 * y + x] = c[i];
+                w[1][3 * y + x] = c[nv + i];
+                w[2][3 * y + x] = c[2 * nv + i];
+            }
+        }
+        let qx = (cols - 2 * wx).min(2);
+        let qy = (rows - 2 * wy).min(2);
+        (w, lane_mask(qx, qy))
+    }
+
+    /// Walks block `bi`'s hierarchy front to back, calling `leaf(wx, wy, tmax)` for each
+    /// window met; `leaf` returns the new `tmax` and whether to stop.
+    #[inline(always)]
+    fn walk_block(
+        &self,
+        bi: usize,
+        r: &PreparedRay,
+        mut tmax: f32,
+        leaf: &mut impl FnMut(&Block, usize, usize, f32) -> (f32, bool),
+    ) -> (f32, bool) {
+        let b = &self.blocks[bi];
+        let boxes = &self.boxes[b.boxes as usize..b.boxes as usize + b.num_boxes()];
+        let (mask, near) = test4(&boxes[0], r, tmax);
+        let (order, n) = front_to_back(mask, &near);
+        for &c in &order[..n] {
+            let c = c as usize;
+            if near[c] > tmax {
+                continue;
+            }
+            match slot(b, 0, c) {
+                Slot::Window(wx, wy) => {
+                    let (t, stop) = leaf(b, wx, wy, tmax);
+                    tmax = t;
+                    if stop {
+                        return (tmax, true);
+                    }
+                }
+                Slot::Node(q) => {
+                    let (m2, near2) = test4(&boxes[q], r, tmax);
+                    let (order2, n2) = front_to_back(m2, &near2);
+                    for &c2 in &order2[..n2] {
+                        let c2 = c2 as usize;
+                        if near2[c2] > tmax {
+                            continue;
+                        }
+                        if let Slot::Window(wx, wy) = slot(b, q, c2) {
+                            let (t, stop) = leaf(b, wx, wy, tmax);
+                            tmax = t;
+                            if stop {
+                                return (tmax, true);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        (tmax, false)
+    }
+
+    /// Closest hit of `ray` in `[tmin, tmax]`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let r = PreparedRay::new(ray)?;
+        let mut best: Option<Best> = None;
+        let nblocks = self.blocks.len();
+        let pf = Prefetch {
+            boxes: &self.top_boxes,
+            nodes: &self.top.nodes,
+            tris: &[],
+        };
+        walk(&self.top, self.depth, pf, &r, |li, tmax| {
+            let prim = self.top_index[li] as usize;
+            if prim < nblocks {
+                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
+                    let (w, lanes) = self.window(b, wx, wy);
+                    if let Some((l, t, b1, b2)) = window::window(&r, &w, lanes, tmax) {
+                        let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
+                        let (x, y) = (2 * wx + qx, 2 * wy + qy);
+                        let id = b.triangle(x, y, h);
+                        if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+                            best = Some(Best {
+                                at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
+                                id,
+                                t,
+                                b1,
+                                b2,
+                            });
+                            return (t, false);
+                        }
+                    }
+                    (tmax, false)
+                };
+                let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
+                (t, false)
+            } else {
+                let li = prim - nblocks;
+                let tri = &self.loose[li];
+                let [a, b, c] = tri.p;
+                if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
+                    if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
+                        best = Some(Best {
+                            at: Found::Loose(li as u32),
+                            id: tri.id,
+                            t,
+                            b1,
+                            b2,
+                        });
+                        return (t, false);
+                    }
+                }
+                (tmax, false)
+            }
+        });
+        best.map(|b| self.hit(b))
+    }
+
+    /// True if anything is hit in `[tmin, tmax]`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        let Some(r) = PreparedRay::new(ray) else {
+            return false;
+        };
+        let mut hit = false;
+        let nblocks = self.blocks.len();
+        let pf = Prefetch {
+            boxes: &self.top_boxes,
+            nodes: &self.top.nodes,
+            tris: &[],
+        };
+        walk(&self.top, self.depth, pf, &r, |li, tmax| {
+            let prim = self.top_index[li] as usize;
+            if prim < nblocks {
+                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
+                    let (w, lanes) = self.window(b, wx, wy);
+                    (tmax, window::window(&r, &w, lanes, tmax).is_some())
+                };
+                hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
+            } else {
+                let [a, b, c] = self.loose[prim - nblocks].p;
+                hit = intersect_prepared(&r, a, b, c, tmax).is_some();
+            }
+            (tmax, hit)
+        });
+        hit
+    }
+
+    /// Closest hits of many rays, in parallel.
+    pub fn intersect_batch(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        rays.par_iter()
+            .with_min_len(256)
+            .map(|r| self.intersect(r))
+            .collect()
+    }
+
+    /// The hit record.
+    fn hit(&self, best: Best) -> Hit {
+        let (p, n, uv, face, k, level) = match best.at {
+            Found::Grid(bi, x, y, h) => {
+                let b = &self.blocks[bi as usize];
+                let (x, y, h) = (x as usize, y as usize, h as usize);
+                let corners = if h == 0 {
+                    [(x, y), (x + 1, y), (x + 1, y + 1)]
+                } else {
+                    [(x, y), (x + 1, y + 1), (x, y + 1)]
+                };
+                let nv = b.num_vertices();
+                let idx = corners.map(|(cx, cy)| cy * (b.cols as usize + 1) + cx);
+                let c = &self.coords[b.vert as usize..];
+                let p = idx.map(|i| [c[i], c[nv + i], c[2 * nv + i]]);
+                let n = idx.map(|i| oct_decode(self.normals[b.normal as usize + i]));
+                let uv = corners.map(|(cx, cy)| b.uv(cx, cy));
+                let level = self.levels[b.level as usize + 2 * (y * b.cols as usize + x) + h];
+                (p, n, uv, b.face, b.k, level)
+            }
+            Found::Loose(li) => {
+                let l = &self.loose[li as usize];
+                (l.p, l.n.map(oct_decode), l.uv, l.face, l.k, l.level)
+            }
+        };
+        let (t, b1, b2) = (best.t, best.b1, best.b2);
+        let b0 = 1.0 - b1 - b2;
+        let u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
+        let v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
+        let [a, bb, c] = p;
+        let e1 = [bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]];
+        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let ng = normalize([
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ]);
+        let ns = normalize(std::array::from_fn(|i| {
+            b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]
+        }));
+        Hit {
+            t,
+            triangle: best.id,
+            face,
+            k,
+            u,
+            v,
+            b1,
+            b2,
+            ng,
+            ns: if ns.iter().all(|x| x.is_finite()) {
+                ns
+            } else {
+                ng
+            },
+            level,
+        }
+    }
+}
+
+impl crate::bvh::Intersect for GridMesh {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        GridMesh::intersect(self, ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        GridMesh::occluded(self, ray)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runs_tile_and_stay_small() {
+        for n in 1..40 {
+            let r = runs(n);
+            assert_eq!(r.iter().map(|x| x.1).sum::<usize>(), n);
+            assert!(r.iter().all(|x| x.1 >= 1 && x.1 <= BLOCK), "{n}: {r:?}");
+            for w in r.windows(2) {
+                assert_eq!(w[0].0 + w[0].1, w[1].0);
+            }
+        }
+        assert_eq!(runs(16), vec![(0, 8), (8, 8)]);
+        assert_eq!(runs(4), vec![(0, 4)]);
+    }
+}

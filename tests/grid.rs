@@ -1,0 +1,209 @@
+//! The grid core ([`GridMesh`]) against the triangle BVH ([`MeshBvh`]) on the same diced
+//! triangles: hit or miss equal on every ray (random rays through the box, rays aimed exactly
+//! at diced vertices and edge points), `t` equal bit for bit on all but a few, the reported
+//! triangle giving that `t` on its own, its parameters and normals those of the diced
+//! triangle. (`t` may differ by an ulp: a box is skipped when its entry distance exceeds the
+//! best `t` so far, and a box's entry distance and a triangle's `t` round differently, so
+//! which of two triangles within an ulp is tested depends on the order of the traversal.) Uniform
+//! rates (pure grids), length-based rates (zippers between different rates: loose triangles)
+//! and n-gons, on the closed corpus shapes and on random creased generator meshes.
+
+mod common;
+mod oracle;
+
+use limitray::bvh::{intersect_triangle, Hit, MeshBvh, Ray};
+use limitray::dice::{dice, DiceOptions, DiceRate, DicedMesh};
+use limitray::grid::GridMesh;
+use limitray::harness::probe::aimed_rays;
+use limitray::harness::rays::random_rays;
+use limitray::mesh::obj::{parse_obj, read_obj};
+use limitray::mesh::ControlMesh;
+use limitray::patch::{PatchOptions, PatchTable};
+use oracle::gen::{generate, Features};
+
+/// Counts of a comparison.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    hits: usize,
+    /// Hits on different triangles (equal or ulp-close `t`).
+    other_triangle: usize,
+    /// Hits whose `t` differs.
+    other_t: usize,
+    /// Largest relative difference of `t`.
+    worst_t: f64,
+}
+
+/// Compares the two structures on `rays`.
+fn compare(name: &str, d: &DicedMesh, rays: &[Ray]) -> Counts {
+    let grid = GridMesh::build(d);
+    let bvh = MeshBvh::build(d.clone());
+    assert_eq!(grid.triangles, d.triangles.len());
+    let mut c = Counts::default();
+    let alone = |h: &Hit, ray: &Ray| {
+        let p = d.triangles[h.triangle as usize].map(|v| d.positions[v as usize]);
+        intersect_triangle(ray, p[0], p[1], p[2]).map(|x| x.0.to_bits())
+    };
+    for (i, ray) in rays.iter().enumerate() {
+        let a = grid.intersect(ray);
+        let b = bvh.intersect(ray);
+        assert_eq!(
+            a.is_some(),
+            b.is_some(),
+            "{name}: ray {i} {ray:?}: grid {a:?}, triangle BVH {b:?}"
+        );
+        assert_eq!(grid.occluded(ray), a.is_some(), "{name}: ray {i}");
+        let (Some(a), Some(b)) = (a, b) else { continue };
+        c.hits += 1;
+        // Each reported triangle, alone, gives the reported t.
+        assert_eq!(alone(&a, ray), Some(a.t.to_bits()), "{name}: ray {i}");
+        assert_eq!(alone(&b, ray), Some(b.t.to_bits()), "{name}: ray {i}");
+        if a.t != b.t {
+            c.other_t += 1;
+            let rel = (a.t as f64 - b.t as f64).abs() / (a.t.abs().max(b.t.abs()) as f64);
+            c.worst_t = c.worst_t.max(rel);
+        }
+        if a.triangle != b.triangle {
+            c.other_triangle += 1;
+            continue;
+        }
+        check_record(name, i, d, &a, &b);
+    }
+    // An ulp or two of `t`, on rays through shared vertices and edges and on coincident
+    // sheets, where two triangles' `t` are within rounding of each other.
+    assert!(c.worst_t <= 4.0 * f32::EPSILON as f64, "{name}: {c:?}");
+    c
+}
+
+/// The same triangle's hit records agree: barycentrics and face bit for bit, `(u, v)` within
+/// 2 ulps (the grid computes corner parameters as `i / n`, the pattern as `1 − j / n` on some
+/// sides), the shading normal within what octahedral corner normals allow.
+fn check_record(name: &str, i: usize, d: &DicedMesh, a: &Hit, b: &Hit) {
+    assert_eq!(
+        (a.b1.to_bits(), a.b2.to_bits(), a.face, a.k, a.level),
+        (b.b1.to_bits(), b.b2.to_bits(), b.face, b.k, b.level),
+        "{name}: ray {i}"
+    );
+    assert_eq!(a.ng, b.ng, "{name}: ray {i}");
+    assert!(
+        (a.u - b.u).abs() <= 2.0 * f32::EPSILON && (a.v - b.v).abs() <= 2.0 * f32::EPSILON,
+        "{name}: ray {i}: uv {} {} vs {} {}",
+        a.u,
+        a.v,
+        b.u,
+        b.v
+    );
+    // Each corner normal is within 4.3e-5 of the exact one; normalising the interpolated
+    // sum divides that by its length (short where the corner normals nearly cancel).
+    let n = d.triangles[a.triangle as usize].map(|v| d.normals[v as usize]);
+    let w = [1.0 - a.b1 - a.b2, a.b1, a.b2];
+    let sum: [f32; 3] = std::array::from_fn(|k| w[0] * n[0][k] + w[1] * n[1][k] + w[2] * n[2][k]);
+    let len = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+    let tol = 1e-6 + 5e-5 * (w[0].abs() + w[1].abs() + w[2].abs()) / len;
+    let dn: f32 = (0..3)
+        .map(|k| (a.ns[k] - b.ns[k]).abs())
+        .fold(0.0, f32::max);
+    assert!(
+        dn <= 2.0 * tol,
+        "{name}: ray {i}: shading normals {:?} vs {:?}",
+        a.ns,
+        b.ns
+    );
+}
+
+fn diced(mesh: &ControlMesh, rate: DiceRate) -> DicedMesh {
+    let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
+    dice(&table, mesh, &DiceOptions { rate, max_rate: 64 }).unwrap()
+}
+
+fn rays_for(d: &DicedMesh, n: usize, seed: u64) -> Vec<Ray> {
+    let b = d.bounds();
+    let mut rays = random_rays(b, n, seed);
+    let c: [f32; 3] =
+        std::array::from_fn(|k| 0.5 * (b[0][k] + b[1][k]) + 0.01 * (b[1][k] - b[0][k]));
+    let o: [f32; 3] = std::array::from_fn(|k| b[1][k] + 0.7 * (b[1][k] - b[0][k]));
+    rays.extend(aimed_rays(d, c, n));
+    rays.extend(aimed_rays(d, o, n));
+    rays
+}
+
+fn rates(diag: f64) -> Vec<DiceRate> {
+    vec![
+        DiceRate::Uniform(1),
+        DiceRate::Uniform(3),
+        DiceRate::Uniform(16),
+        DiceRate::EdgeLength(diag / 40.0),
+        DiceRate::EdgeLength(diag / 150.0),
+    ]
+}
+
+#[test]
+fn corpus_shapes_trace_as_the_triangle_bvh() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let (mut shapes, mut total, mut loose) = (0, Counts::default(), 0usize);
+    for path in common::catmark_files(&models) {
+        let Ok(mesh) = read_obj(&path) else { continue };
+        if !common::closed(&mesh) || mesh.num_faces() > 2000 {
+            continue;
+        }
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        for (r, rate) in rates(mesh.diagonal()).into_iter().enumerate() {
+            let d = diced(&mesh, rate);
+            let c = compare(
+                &format!("{name} {rate:?}"),
+                &d,
+                &rays_for(&d, 1500, r as u64),
+            );
+            total.hits += c.hits;
+            total.other_triangle += c.other_triangle;
+            total.other_t += c.other_t;
+            total.worst_t = total.worst_t.max(c.worst_t);
+            loose += GridMesh::build(&d).loose.len();
+        }
+        shapes += 1;
+    }
+    eprintln!("{shapes} shapes: {total:?}, {loose} loose triangles");
+    assert!(shapes >= 25 && total.hits > 100_000 && loose > 1000);
+}
+
+#[test]
+fn random_creased_meshes_trace_as_the_triangle_bvh() {
+    let features = Features {
+        smooth_triangles: true,
+        skip_chaikin_boundary_none: false,
+        nonmanifold: true,
+    };
+    let mut hits = 0;
+    for seed in 0..60u64 {
+        let g = generate(seed, features);
+        let mesh = parse_obj(&g.to_obj(), Some("generated")).unwrap();
+        let rate = rates(mesh.diagonal())[(seed % 5) as usize];
+        let d = diced(&mesh, rate);
+        hits += compare(
+            &format!("seed {seed} ({}) {rate:?}", g.recipe),
+            &d,
+            &rays_for(&d, 400, seed),
+        )
+        .hits;
+    }
+    assert!(hits > 10_000, "{hits} hits");
+}
+
+/// At uniform rates every triangle is in a grid block; blocks hold at most 8×8 quads.
+#[test]
+fn uniform_rates_are_all_grid() {
+    let mesh = limitray::mesh::shapes::rounded_box(2.0);
+    for rate in [1, 4, 8, 16, 24] {
+        let d = diced(&mesh, DiceRate::Uniform(rate));
+        let g = GridMesh::build(&d);
+        assert!(g.loose.is_empty(), "rate {rate}: {} loose", g.loose.len());
+        let quads: usize = g
+            .blocks
+            .iter()
+            .map(|b| b.cols as usize * b.rows as usize)
+            .sum();
+        assert_eq!(2 * quads, d.triangles.len());
+        assert!(g.blocks.iter().all(|b| b.cols <= 8 && b.rows <= 8));
+    }
+}
