@@ -133,9 +133,10 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
     };
     let r = bench(&mesh, &opts)?;
     if args.json {
-        let mut v = r.json();
-        v["mesh"] = serde_json::json!(name);
-        println!("{v}");
+        for mut v in r.json_lines() {
+            v["mesh"] = serde_json::json!(name);
+            println!("{v}");
+        }
     } else {
         println!("{name}");
         print!("{}", r.table());

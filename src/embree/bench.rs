@@ -18,6 +18,7 @@ use crate::bvh::{MeshBvh, Ray, Ray64};
 use crate::dice::{dice, DiceOptions, DiceRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::ExactTracer;
+use crate::grid::GridMesh;
 use crate::mesh::ControlMesh;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -59,14 +60,21 @@ impl Default for BenchOptions {
 /// Results of one engine.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EngineResult {
-    /// `limitray`, `embree-triangles`, `embree-subdiv`, `embree-tri-robust` (the same
-    /// triangles with `RTC_SCENE_FLAG_ROBUST`) or `limitray-exact` (the reference intersector
-    /// on the exact limit surface, in f64, whatever the rate).
+    /// `limitray` (the grid core), `limitray-triangles` (the diced triangles under one
+    /// CWBVH, the core before grids), `embree-triangles`, `embree-subdiv`,
+    /// `embree-tri-robust` (the same triangles with `RTC_SCENE_FLAG_ROBUST`) or
+    /// `limitray-exact` (the reference intersector on the exact limit surface, in f64,
+    /// whatever the rate).
     pub name: &'static str,
-    /// Median build time in seconds (for limitray: patch table + dicing + BVH; for Embree
-    /// triangles: scene from the already diced triangles; for Embree subdivision: geometry
-    /// and scene commit from the control mesh).
+    /// Median build time in seconds (for limitray: patch table + dicing + grid blocks and
+    /// top level, from the control mesh; for Embree triangles: scene from the already diced
+    /// triangles; for Embree subdivision: geometry and scene commit from the control mesh).
     pub build_s: f64,
+    /// Bytes the queries use: limitray's structures as they count them, Embree's as its
+    /// memory monitor saw its allocations grow during the build (buffers included).
+    pub bytes: Option<usize>,
+    /// Any-hit (occlusion) queries per second on the incoherent rays, median.
+    pub anyhit_rays_per_s: f64,
     /// Parts of the build (median seconds), where there are several.
     pub build_parts: Vec<(&'static str, f64)>,
     /// Coherent (camera) rays per second, median.
@@ -103,43 +111,44 @@ pub struct BenchReport {
 }
 
 impl BenchReport {
-    /// JSON object.
-    pub fn json(&self) -> serde_json::Value {
-        let engines: Vec<serde_json::Value> = self
-            .engines
+    /// One JSON object per engine: `engine`, `build_ms`, `coherent_mrays_s`,
+    /// `incoherent_mrays_s`, `anyhit_mrays_s`, `bytes_per_triangle`, `leaks`, `leaks_far`,
+    /// with the run's settings (`mesh` is added by the CLI) and the build's parts.
+    pub fn json_lines(&self) -> Vec<serde_json::Value> {
+        self.engines
             .iter()
             .map(|e| {
                 let parts: serde_json::Map<String, serde_json::Value> = e
                     .build_parts
                     .iter()
-                    .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
+                    .map(|(k, v)| (format!("{k}_ms"), serde_json::json!(v * 1e3)))
                     .collect();
                 serde_json::json!({
-                    "name": e.name,
-                    "build_s": e.build_s,
+                    "engine": e.name,
+                    "build_ms": e.build_s * 1e3,
                     "build_parts": parts,
-                    "coherent_rays_per_s": e.coherent_rays_per_s,
-                    "incoherent_rays_per_s": e.incoherent_rays_per_s,
+                    "coherent_mrays_s": e.coherent_rays_per_s * 1e-6,
+                    "incoherent_mrays_s": e.incoherent_rays_per_s * 1e-6,
+                    "anyhit_mrays_s": e.anyhit_rays_per_s * 1e-6,
+                    "bytes": e.bytes,
+                    "bytes_per_triangle": e.bytes.map(|b| b as f64 / self.triangles.max(1) as f64),
                     "coherent_hits": e.coherent_hits,
                     "incoherent_hits": e.incoherent_hits,
                     "leaks": e.leaks,
                     "leaks_far": e.leaks_far,
+                    "leak_rays": self.leak_rays,
+                    "faces": self.faces,
+                    "triangles": self.triangles,
+                    "rate": self.options.rate,
+                    "rays": self.options.rays,
+                    "threads": self.options.threads,
+                    "reps": self.options.reps,
+                    "camera": [self.camera.0, self.camera.1],
+                    "far_offset": FAR_OFFSET,
+                    "embree_version": self.embree_version,
                 })
             })
-            .collect();
-        serde_json::json!({
-            "faces": self.faces,
-            "triangles": self.triangles,
-            "rate": self.options.rate,
-            "rays": self.options.rays,
-            "threads": self.options.threads,
-            "reps": self.options.reps,
-            "camera": [self.camera.0, self.camera.1],
-            "leak_rays": self.leak_rays,
-            "far_offset": FAR_OFFSET,
-            "embree_version": self.embree_version,
-            "engines": engines,
-        })
+            .collect()
     }
 
     /// A plain-text table: one row per engine, ratios against limitray.
@@ -157,27 +166,36 @@ impl BenchReport {
             self.embree_version
         );
         s.push_str(&format!(
-            "{:<18} {:>10} {:>14} {:>14} {:>9} {:>9} {:>9} {:>11}\n",
+            "{:<18} {:>10} {:>14} {:>14} {:>12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>11}\n",
             "engine",
             "build ms",
             "coherent Mr/s",
             "incoher. Mr/s",
+            "any-hit Mr/s",
+            "B/tri",
             "build x",
             "coh. x",
             "incoh. x",
+            "any x",
             "leaks/far"
         ));
         let base = &self.engines[0];
         for e in &self.engines {
+            let per_tri = e.bytes.map_or("-".to_string(), |b| {
+                format!("{:.1}", b as f64 / self.triangles.max(1) as f64)
+            });
             s.push_str(&format!(
-                "{:<18} {:>10.1} {:>14.3} {:>14.3} {:>9.2} {:>9.2} {:>9.2} {:>5}/{:<5}\n",
+                "{:<18} {:>10.1} {:>14.3} {:>14.3} {:>12.3} {:>8} {:>9.2} {:>9.2} {:>9.2} {:>9.2} {:>5}/{:<5}\n",
                 e.name,
                 e.build_s * 1e3,
                 e.coherent_rays_per_s * 1e-6,
                 e.incoherent_rays_per_s * 1e-6,
+                e.anyhit_rays_per_s * 1e-6,
+                per_tri,
                 e.build_s / base.build_s,
                 e.coherent_rays_per_s / base.coherent_rays_per_s,
                 e.incoherent_rays_per_s / base.incoherent_rays_per_s,
+                e.anyhit_rays_per_s / base.anyhit_rays_per_s,
                 e.leaks,
                 e.leaks_far
             ));
@@ -357,11 +375,24 @@ pub fn leak_targets(mesh: &ControlMesh, bvh: &MeshBvh, seed: u64) -> Vec<LeakTar
 
 trait Engine: Sync {
     fn hit(&self, r: &TestRay) -> bool;
+    fn occluded(&self, r: &TestRay) -> bool;
 }
 
 impl Engine for MeshBvh {
     fn hit(&self, r: &TestRay) -> bool {
         self.intersect(&Ray::new(r.origin, r.dir)).is_some()
+    }
+    fn occluded(&self, r: &TestRay) -> bool {
+        MeshBvh::occluded(self, &Ray::new(r.origin, r.dir))
+    }
+}
+
+impl Engine for GridMesh {
+    fn hit(&self, r: &TestRay) -> bool {
+        self.intersect(&Ray::new(r.origin, r.dir)).is_some()
+    }
+    fn occluded(&self, r: &TestRay) -> bool {
+        GridMesh::occluded(self, &Ray::new(r.origin, r.dir))
     }
 }
 
@@ -370,6 +401,9 @@ impl Engine for ExactTracer {
         self.trace(&Ray64::new(r.origin.map(f64::from), r.dir.map(f64::from)))
             .hit
             .is_some()
+    }
+    fn occluded(&self, r: &TestRay) -> bool {
+        self.hit(r)
     }
 }
 
@@ -398,23 +432,32 @@ impl Engine for Scene {
         self.intersect(r.origin, r.dir, 0.0, f32::INFINITY)
             .is_some()
     }
+    fn occluded(&self, r: &TestRay) -> bool {
+        Scene::occluded(self, r.origin, r.dir, 0.0, f32::INFINITY)
+    }
 }
 
-fn trace(engine: &dyn Engine, rays: &[TestRay]) -> (f64, usize) {
+fn trace(engine: &dyn Engine, rays: &[TestRay], any: bool) -> (f64, usize) {
     let t0 = Instant::now();
     let hits = rays
         .par_iter()
         .with_min_len(256)
-        .filter(|r| engine.hit(r))
+        .filter(|r| {
+            if any {
+                engine.occluded(r)
+            } else {
+                engine.hit(r)
+            }
+        })
         .count();
     (t0.elapsed().as_secs_f64(), hits)
 }
 
-fn throughput(engine: &dyn Engine, rays: &[TestRay], reps: usize) -> (f64, usize) {
+fn throughput(engine: &dyn Engine, rays: &[TestRay], reps: usize, any: bool) -> (f64, usize) {
     let mut times = Vec::new();
     let mut hits = 0;
     for _ in 0..reps {
-        let (t, h) = trace(engine, rays);
+        let (t, h) = trace(engine, rays, any);
         times.push(t);
         hits = h;
     }
@@ -422,22 +465,20 @@ fn throughput(engine: &dyn Engine, rays: &[TestRay], reps: usize) -> (f64, usize
 }
 
 fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
-    rays.len() - trace(engine, rays).1
+    rays.len() - trace(engine, rays, false).1
 }
 
-struct Built {
-    bvh: MeshBvh,
-    tris: Scene,
-    robust: Scene,
-    sub: Scene,
-    /// Seconds per repetition: patch table, dicing, BVH, Embree triangles, Embree subdivision,
-    /// Embree triangles with `RTC_SCENE_FLAG_ROBUST`.
-    parts: [Vec<f64>; 6],
+/// limitray's two diced structures, and the seconds of each build part per repetition:
+/// patch table, dicing, grid core, triangle BVH.
+struct Limitray {
+    grid: GridMesh,
+    tris: MeshBvh,
+    parts: [Vec<f64>; 4],
 }
 
-fn build_all(mesh: &ControlMesh, rate: u32, device: &Device, reps: usize) -> Result<Built> {
-    let mut parts: [Vec<f64>; 6] = Default::default();
-    let mut last: Option<(MeshBvh, Scene, Scene, Scene)> = None;
+fn build_limitray(mesh: &ControlMesh, rate: u32, reps: usize) -> Result<Limitray> {
+    let mut parts: [Vec<f64>; 4] = Default::default();
+    let mut last: Option<(GridMesh, MeshBvh)> = None;
     for _ in 0..reps.max(1) {
         // Free the previous repetition first: peak memory stays at one copy.
         drop(last.take());
@@ -454,10 +495,49 @@ fn build_all(mesh: &ControlMesh, rate: u32, device: &Device, reps: usize) -> Res
         )?;
         drop(table);
         let t2 = Instant::now();
-        let bvh = MeshBvh::build(diced);
+        let grid = GridMesh::build(&diced);
         let t3 = Instant::now();
-        let tris = triangle_scene(device, &bvh.diced, SceneOptions::default())?;
+        let tris = MeshBvh::build(diced);
         let t4 = Instant::now();
+        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4)]
+            .into_iter()
+            .enumerate()
+        {
+            parts[i].push((b - a).as_secs_f64());
+        }
+        last = Some((grid, tris));
+    }
+    let (grid, tris) = last.expect("at least one repetition");
+    Ok(Limitray { grid, tris, parts })
+}
+
+/// Embree's three scenes, with the seconds of each build per repetition and the bytes each
+/// added to the device.
+struct Embree {
+    tris: Scene,
+    sub: Scene,
+    robust: Scene,
+    parts: [Vec<f64>; 3],
+    bytes: [usize; 3],
+}
+
+fn build_embree(
+    mesh: &ControlMesh,
+    diced: &crate::dice::DicedMesh,
+    rate: u32,
+    device: &Device,
+    reps: usize,
+) -> Result<Embree> {
+    let mut parts: [Vec<f64>; 3] = Default::default();
+    let mut bytes = [0usize; 3];
+    let mut last: Option<(Scene, Scene, Scene)> = None;
+    for _ in 0..reps.max(1) {
+        drop(last.take());
+        let m0 = device.memory_bytes();
+        let t0 = Instant::now();
+        let tris = triangle_scene(device, diced, SceneOptions::default())?;
+        let t1 = Instant::now();
+        let m1 = device.memory_bytes();
         let sub = subdivision_scene(
             device,
             mesh,
@@ -465,31 +545,31 @@ fn build_all(mesh: &ControlMesh, rate: u32, device: &Device, reps: usize) -> Res
             rate as f32,
             SceneOptions::default(),
         )?;
-        let t5 = Instant::now();
+        let t2 = Instant::now();
+        let m2 = device.memory_bytes();
         let robust = triangle_scene(
             device,
-            &bvh.diced,
+            diced,
             SceneOptions {
                 robust: true,
                 ..SceneOptions::default()
             },
         )?;
-        let t6 = Instant::now();
-        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5), (t5, t6)]
-            .into_iter()
-            .enumerate()
-        {
+        let t3 = Instant::now();
+        let m3 = device.memory_bytes();
+        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3)].into_iter().enumerate() {
             parts[i].push((b - a).as_secs_f64());
         }
-        last = Some((bvh, tris, sub, robust));
+        bytes = [m1 - m0, m2 - m1, m3 - m2].map(|b| b.max(0) as usize);
+        last = Some((tris, sub, robust));
     }
-    let (bvh, tris, sub, robust) = last.expect("at least one repetition");
-    Ok(Built {
-        bvh,
+    let (tris, sub, robust) = last.expect("at least one repetition");
+    Ok(Embree {
         tris,
-        robust,
         sub,
+        robust,
         parts,
+        bytes,
     })
 }
 
@@ -513,77 +593,98 @@ pub fn bench(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport> {
 }
 
 fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport> {
-    let device = Device::with_threads(opts.threads)?;
-    let built = build_all(mesh, opts.rate, &device, opts.reps)?;
     let bounds = mesh.bounds();
     let camera = rays::camera_size(opts.rays);
     let coherent = rays::camera(bounds, camera.0, camera.1);
     let incoherent = rays::incoherent(bounds, opts.rays, opts.seed);
-
     let diag = mesh.diagonal();
     let depth = 0.05 * diag;
-    let targets = leak_targets(mesh, &built.bvh, opts.seed);
-    let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
-
-    let p = &built.parts;
-    let med = |i: usize| median(p[i].clone());
-    let limitray_total = median(
-        (0..p[0].len())
-            .map(|r| p[0][r] + p[1][r] + p[2][r])
-            .collect(),
-    );
-    let builds = [
-        (
-            limitray_total,
-            vec![("patch_table", med(0)), ("dice", med(1)), ("bvh", med(2))],
-        ),
-        (med(3), vec![]),
-        (med(4), vec![]),
-        (med(5), vec![]),
-    ];
-    let names = [
-        "limitray",
-        "embree-triangles",
-        "embree-subdiv",
-        "embree-tri-robust",
-    ];
-    let mut results = Vec::new();
-    {
-        let engines: [&dyn Engine; 4] = [&built.bvh, &built.tris, &built.sub, &built.robust];
-        for ((name, engine), (build_s, parts)) in names.into_iter().zip(engines).zip(builds) {
-            let (coh, coh_hits) = throughput(engine, &coherent, opts.reps);
-            let (inc, inc_hits) = throughput(engine, &incoherent, opts.reps);
-            results.push(EngineResult {
-                name,
-                build_s,
-                build_parts: parts,
-                coherent_rays_per_s: coh,
-                incoherent_rays_per_s: inc,
-                coherent_hits: coh_hits,
-                incoherent_hits: inc_hits,
-                leaks: leaks(engine, &leak_rays),
-                leaks_far: 0,
-            });
+    let measure = |name: &'static str,
+                   engine: &dyn Engine,
+                   build_s: f64,
+                   build_parts: Vec<(&'static str, f64)>,
+                   bytes: Option<usize>,
+                   leak_rays: &[TestRay]| {
+        let (coh, coh_hits) = throughput(engine, &coherent, opts.reps, false);
+        let (inc, inc_hits) = throughput(engine, &incoherent, opts.reps, false);
+        let (any, _) = throughput(engine, &incoherent, opts.reps, true);
+        EngineResult {
+            name,
+            build_s,
+            bytes,
+            build_parts,
+            coherent_rays_per_s: coh,
+            incoherent_rays_per_s: inc,
+            anyhit_rays_per_s: any,
+            coherent_hits: coh_hits,
+            incoherent_hits: inc_hits,
+            leaks: leaks(engine, leak_rays),
+            leaks_far: 0,
         }
+    };
+
+    // limitray first, before Embree has started any worker threads, so that nothing of
+    // Embree's runs during limitray's measurements.
+    let lr = build_limitray(mesh, opts.rate, opts.reps)?;
+    let targets = leak_targets(mesh, &lr.tris, opts.seed);
+    let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
+    let p = &lr.parts;
+    let med = |i: usize| median(p[i].clone());
+    let total = |last: usize| {
+        median(
+            (0..p[0].len())
+                .map(|r| p[0][r] + p[1][r] + p[last][r])
+                .collect(),
+        )
+    };
+    let mut results = vec![
+        measure(
+            "limitray",
+            &lr.grid,
+            total(2),
+            vec![("patch_table", med(0)), ("dice", med(1)), ("grid", med(2))],
+            Some(lr.grid.bytes()),
+            &leak_rays,
+        ),
+        measure(
+            "limitray-triangles",
+            &lr.tris,
+            total(3),
+            vec![("patch_table", med(0)), ("dice", med(1)), ("bvh", med(3))],
+            Some(lr.tris.bytes() - lr.tris.diced.bytes()),
+            &leak_rays,
+        ),
+    ];
+    let triangles = lr.tris.diced.triangles.len();
+
+    let device = Device::with_threads(opts.threads)?;
+    let em = build_embree(mesh, &lr.tris.diced, opts.rate, &device, opts.reps)?;
+    drop(lr);
+    let names = ["embree-triangles", "embree-subdiv", "embree-tri-robust"];
+    let engines: [&dyn Engine; 3] = [&em.tris, &em.sub, &em.robust];
+    for (i, (name, engine)) in names.into_iter().zip(engines).enumerate() {
+        let build = median(em.parts[i].clone());
+        results.push(measure(
+            name,
+            engine,
+            build,
+            vec![],
+            Some(em.bytes[i]),
+            &leak_rays,
+        ));
     }
-    let triangles = built.bvh.diced.triangles.len();
-    drop(built);
+    drop(em);
     // The reference intersector on the same rays (it does not depend on the rate).
     {
         let (exact, table_s, pieces_s) = build_exact(mesh, opts.reps)?;
-        let (coh, coh_hits) = throughput(&exact, &coherent, opts.reps);
-        let (inc, inc_hits) = throughput(&exact, &incoherent, opts.reps);
-        results.push(EngineResult {
-            name: "limitray-exact",
-            build_s: table_s + pieces_s,
-            build_parts: vec![("patch_table", table_s), ("pieces", pieces_s)],
-            coherent_rays_per_s: coh,
-            incoherent_rays_per_s: inc,
-            coherent_hits: coh_hits,
-            incoherent_hits: inc_hits,
-            leaks: leaks(&exact, &leak_rays),
-            leaks_far: 0,
-        });
+        results.push(measure(
+            "limitray-exact",
+            &exact,
+            table_s + pieces_s,
+            vec![("patch_table", table_s), ("pieces", pieces_s)],
+            None,
+            &leak_rays,
+        ));
     }
     drop((coherent, incoherent));
 
@@ -594,23 +695,20 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
             p[k] += FAR_OFFSET[k];
         }
     }
-    let far_built = build_all(&far, opts.rate, &device, 1)?;
-    let far_targets = leak_targets(&far, &far_built.bvh, opts.seed);
+    let far_lr = build_limitray(&far, opts.rate, 1)?;
+    let far_targets = leak_targets(&far, &far_lr.tris, opts.seed);
     let far_rays = rays::towards_points(&far_targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
-    let far_engines: [&dyn Engine; 4] = [
-        &far_built.bvh,
-        &far_built.tris,
-        &far_built.sub,
-        &far_built.robust,
-    ];
-    for (r, engine) in results.iter_mut().zip(far_engines) {
+    results[0].leaks_far = leaks(&far_lr.grid, &far_rays);
+    results[1].leaks_far = leaks(&far_lr.tris, &far_rays);
+    let far_em = build_embree(&far, &far_lr.tris.diced, opts.rate, &device, 1)?;
+    drop(far_lr);
+    let far_engines: [&dyn Engine; 3] = [&far_em.tris, &far_em.sub, &far_em.robust];
+    for (r, engine) in results[2..5].iter_mut().zip(far_engines) {
         r.leaks_far = leaks(engine, &far_rays);
     }
-    drop(far_built);
+    drop(far_em);
     let (far_exact, _, _) = build_exact(&far, 1)?;
-    if let Some(r) = results.iter_mut().find(|r| r.name == "limitray-exact") {
-        r.leaks_far = leaks(&far_exact, &far_rays);
-    }
+    results[5].leaks_far = leaks(&far_exact, &far_rays);
     Ok(BenchReport {
         faces: mesh.num_faces(),
         triangles,

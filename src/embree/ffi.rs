@@ -158,6 +158,11 @@ pub struct RTCInterpolateArguments {
     pub valueCount: u32,
 }
 
+/// `RTCMemoryMonitorFunction`: `bool (*)(void* userPtr, ssize_t bytes, bool post)`; return
+/// `true` to let the allocation proceed.
+pub type RTCMemoryMonitorFunction =
+    Option<unsafe extern "C" fn(user: *mut c_void, bytes: isize, post: bool) -> bool>;
+
 /// `RTCErrorFunction`: `void (*)(void* userPtr, enum RTCError code, const char* str)`.
 pub type RTCErrorFunction =
     Option<unsafe extern "C" fn(user_ptr: *mut c_void, code: u32, message: *const c_char)>;
@@ -197,6 +202,11 @@ extern "C" {
     pub fn rtcGetDeviceLastErrorMessage(device: RTCDevice) -> *const c_char;
     pub fn rtcGetDeviceProperty(device: RTCDevice, prop: u32) -> isize;
     pub fn rtcSetDeviceErrorFunction(device: RTCDevice, f: RTCErrorFunction, user: *mut c_void);
+    pub fn rtcSetDeviceMemoryMonitorFunction(
+        device: RTCDevice,
+        f: RTCMemoryMonitorFunction,
+        user: *mut c_void,
+    );
 
     pub fn rtcNewScene(device: RTCDevice) -> RTCScene;
     pub fn rtcReleaseScene(scene: RTCScene);

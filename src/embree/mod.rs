@@ -18,12 +18,15 @@ pub mod triangles;
 
 use crate::error::{Error, ErrorKind, Result};
 use std::ffi::{c_char, c_void, CStr, CString};
+use std::sync::atomic::{AtomicI64, Ordering};
 use std::sync::{Arc, Mutex};
 
 struct DeviceInner {
     raw: ffi::RTCDevice,
     /// Messages from the error callback, drained by [`Device::check`].
     errors: Box<Mutex<Vec<String>>>,
+    /// Bytes Embree holds, from its memory monitor callback.
+    memory: Box<AtomicI64>,
 }
 
 // SAFETY: an Embree device is thread-safe (all API calls on it may come from any thread);
@@ -36,6 +39,15 @@ impl Drop for DeviceInner {
         // SAFETY: `raw` came from rtcNewDevice and this is its last owner.
         unsafe { ffi::rtcReleaseDevice(self.raw) }
     }
+}
+
+unsafe extern "C" fn on_memory(user: *mut c_void, bytes: isize, _post: bool) -> bool {
+    if !user.is_null() {
+        // SAFETY: `user` is the device's counter, alive as long as the device.
+        let counter = unsafe { &*(user as *const AtomicI64) };
+        counter.fetch_add(bytes as i64, Ordering::Relaxed);
+    }
+    true
 }
 
 unsafe extern "C" fn on_error(user: *mut c_void, code: u32, message: *const c_char) {
@@ -103,8 +115,16 @@ impl Device {
         let user = &*errors as *const Mutex<Vec<String>> as *mut c_void;
         // SAFETY: the callback and its user pointer live as long as the device.
         unsafe { ffi::rtcSetDeviceErrorFunction(raw, Some(on_error), user) };
+        let memory: Box<AtomicI64> = Box::default();
+        let counter = &*memory as *const AtomicI64 as *mut c_void;
+        // SAFETY: as above; the counter is only touched atomically.
+        unsafe { ffi::rtcSetDeviceMemoryMonitorFunction(raw, Some(on_memory), counter) };
         Ok(Device {
-            inner: Arc::new(DeviceInner { raw, errors }),
+            inner: Arc::new(DeviceInner {
+                raw,
+                errors,
+                memory,
+            }),
         })
     }
 
@@ -115,6 +135,12 @@ impl Device {
         } else {
             Device::new(&format!("threads={threads}"))
         }
+    }
+
+    /// Bytes Embree's allocations hold now (its memory monitor's running sum: scenes, BVHs,
+    /// geometry buffers and grids).
+    pub fn memory_bytes(&self) -> i64 {
+        self.inner.memory.load(Ordering::Relaxed)
     }
 
     /// The raw handle (valid while this device lives).

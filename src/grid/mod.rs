@@ -30,7 +30,7 @@ use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
 use rayon::prelude::*;
-use window::{lane_mask, Window};
+use window::{lane_mask, Rows};
 
 /// A triangle outside the grids, with everything its hits need.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,7 +56,8 @@ pub struct Loose {
 pub struct GridMesh {
     /// Block headers.
     pub blocks: Vec<Block>,
-    /// Vertex coordinates of all blocks (per block: `x`, `y`, `z` planes).
+    /// Vertex coordinates of all blocks (per block: `x`, `y`, `z` planes), then four padding
+    /// values (window rows are read four values at a time).
     pub coords: Vec<f32>,
     /// Octahedral vertex normals of all blocks.
     pub normals: Vec<u32>,
@@ -266,6 +267,8 @@ impl GridMesh {
                 level: info.level,
             });
         }
+        // Window rows are read four values at a time: the last plane's last row reads past it.
+        m.coords.extend_from_slice(&[0.0; 4]);
         for b in &prim_boxes {
             for a in 0..3 {
                 m.bounds[0][a] = m.bounds[0][a].min(b.0[0][a]);
@@ -315,27 +318,23 @@ impl GridMesh {
         self.bounds
     }
 
-    /// The nine vertices of window `(wx, wy)` of block `b` (clamped to the block: vertices of
-    /// absent quads repeat present ones) and its lanes.
+    /// The rows of window `(wx, wy)` of block `b` (a row past the block repeats its last; a
+    /// column past it reads the next row's first vertex: their lanes are absent) and its
+    /// lanes.
     #[inline(always)]
-    fn window(&self, b: &Block, wx: usize, wy: usize) -> (Window, u32) {
+    fn window(&self, b: &Block, wx: usize, wy: usize) -> (Rows<'_>, u32) {
         let (cols, rows) = (b.cols as usize, b.rows as usize);
-        let nv = b.num_vertices();
-        let base = b.vert as usize;
-        let c = &self.coords[base..base + 3 * nv];
-        let mut w = [[0f32; 9]; 3];
-        for y in 0..3 {
-            let yy = (2 * wy + y).min(rows);
-            for x in 0..3 {
-                let i = yy * (cols + 1) + (2 * wx + x).min(cols);
-                w[0][3 * y + x] = c[i];
-                w[1][3 * y + x] = c[nv + i];
-                w[2][3 * y + x] = c[2 * nv + i];
-            }
-        }
+        let offs = std::array::from_fn(|y| (2 * wy + y).min(rows) * (cols + 1) + 2 * wx);
         let qx = (cols - 2 * wx).min(2);
         let qy = (rows - 2 * wy).min(2);
-        (w, lane_mask(qx, qy))
+        (
+            Rows {
+                coords: &self.coords[b.vert as usize..],
+                plane: b.num_vertices(),
+                offs,
+            },
+            lane_mask(qx, qy),
+        )
     }
 
     /// Walks block `bi`'s hierarchy front to back, calling `leaf(wx, wy, tmax)` for each

@@ -65,35 +65,46 @@ pub fn window_scalar(r: &PreparedRay, w: &Window, lanes: u32, tmax: f32) -> Opti
     best
 }
 
-/// The closest hit of the window within `tmax`: [`window_scalar`]'s answer, with SSE2 where
-/// available.
-#[inline(always)]
-pub fn window(r: &PreparedRay, w: &Window, lanes: u32, tmax: f32) -> Option<LaneHit> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: SSE2 is part of the x86_64 baseline.
-        unsafe { window_sse(r, w, lanes, tmax) }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        window_scalar(r, w, lanes, tmax)
+/// Where a window's vertices lie in a block: the block's coordinates (`x`, `y`, `z` planes of
+/// `plane` values each, followed by at least three more values) and the plane offsets of the
+/// window's three rows. Each row's three vertices are consecutive; a fourth value is read and
+/// ignored.
+#[derive(Clone, Copy, Debug)]
+pub struct Rows<'a> {
+    /// The block's coordinates, to the end of the mesh's (padded) array.
+    pub coords: &'a [f32],
+    /// Values per plane.
+    pub plane: usize,
+    /// Offset of each row's first vertex within a plane.
+    pub offs: [usize; 3],
+}
+
+impl Rows<'_> {
+    /// The nine vertices (row `y`, column `x` at `3 y + x`).
+    pub fn gather(&self) -> Window {
+        std::array::from_fn(|a| {
+            std::array::from_fn(|i| self.coords[a * self.plane + self.offs[i / 3] + i % 3])
+        })
     }
 }
 
-/// The window's vertices in the ray's sheared space, as the scalar test computes them:
-/// `(x, y, z)` planes.
+/// The closest hit of the window within `tmax`: [`window_scalar`]'s answer on
+/// [`Rows::gather`], with SSE2 where available.
 #[inline(always)]
-fn shear(r: &PreparedRay, w: &Window) -> [[f32; 9]; 3] {
-    let [kx, ky, kz] = r.k;
-    let [sx, sy, sz] = r.s;
-    let mut out = [[0f32; 9]; 3];
-    for i in 0..9 {
-        let at = [w[0][i] - r.o[0], w[1][i] - r.o[1], w[2][i] - r.o[2]];
-        out[0][i] = at[kx] - sx * at[kz];
-        out[1][i] = at[ky] - sy * at[kz];
-        out[2][i] = sz * at[kz];
+pub fn window(r: &PreparedRay, rows: &Rows, lanes: u32, tmax: f32) -> Option<LaneHit> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        assert!(rows
+            .offs
+            .iter()
+            .all(|&o| 2 * rows.plane + o + 4 <= rows.coords.len()));
+        // SAFETY: SSE2 is part of the x86_64 baseline; the loads are in bounds (asserted).
+        unsafe { window_sse(r, rows, lanes, tmax) }
     }
-    out
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        window_scalar(r, &rows.gather(), lanes, tmax)
+    }
 }
 
 /// The `f64` edge functions of a lane whose `f32` ones have a zero, as the scalar test redoes
@@ -117,27 +128,54 @@ fn exact_edges(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> [f32; 3] {
 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn window_sse(r: &PreparedRay, w: &Window, lanes: u32, tmax: f32) -> Option<LaneHit> {
+unsafe fn window_sse(r: &PreparedRay, rows: &Rows, lanes: u32, tmax: f32) -> Option<LaneHit> {
     use std::arch::x86_64::*;
-    let s = shear(r, w);
+    // Each row's vertices in the sheared space, four lanes (the fourth ignored): the scalar
+    // test's operations per vertex, in the same order.
+    let [kx, ky, kz] = r.k;
+    let p = rows.coords.as_ptr();
+    let (ox, oy, oz) = (
+        _mm_set1_ps(r.o[kx]),
+        _mm_set1_ps(r.o[ky]),
+        _mm_set1_ps(r.o[kz]),
+    );
+    let (sx, sy, sz) = (
+        _mm_set1_ps(r.s[0]),
+        _mm_set1_ps(r.s[1]),
+        _mm_set1_ps(r.s[2]),
+    );
+    let mut sh = [[_mm_setzero_ps(); 3]; 3];
+    for (y, row) in sh.iter_mut().enumerate() {
+        let o = rows.offs[y];
+        let atx = _mm_sub_ps(_mm_loadu_ps(p.add(kx * rows.plane + o)), ox);
+        let aty = _mm_sub_ps(_mm_loadu_ps(p.add(ky * rows.plane + o)), oy);
+        let atz = _mm_sub_ps(_mm_loadu_ps(p.add(kz * rows.plane + o)), oz);
+        row[0] = _mm_sub_ps(atx, _mm_mul_ps(sx, atz));
+        row[1] = _mm_sub_ps(aty, _mm_mul_ps(sy, atz));
+        row[2] = _mm_mul_ps(sz, atz);
+    }
+    // Corner lanes of a quad row between vertex rows `r0` and `r1` (see [`CORNERS`]):
+    // a = [r0₀ r0₀ r0₁ r0₁], b = [r0₁ r1₁ r0₂ r1₂], c = [r1₁ r1₀ r1₂ r1₁].
+    let corners = |r0: __m128, r1: __m128| -> (__m128, __m128, __m128) {
+        let a = _mm_shuffle_ps::<0b01_01_00_00>(r0, r0);
+        let lo = _mm_unpacklo_ps(r0, r1);
+        let hi = _mm_unpackhi_ps(r0, r1);
+        let b = _mm_shuffle_ps::<0b01_00_11_10>(lo, hi);
+        let c = _mm_shuffle_ps::<0b01_10_00_01>(r1, r1);
+        (a, b, c)
+    };
+    // The edge-function fallback reads the sheared vertices back as scalars.
+    let mut s = [[0f32; 12]; 3];
+    let mut stored = false;
     let mut best: Option<LaneHit> = None;
     for half in 0..2 {
         let group = (lanes >> (4 * half)) & 0xF;
         if group == 0 {
             continue;
         }
-        let g = |corner: usize, plane: usize| -> __m128 {
-            let l = 4 * half;
-            _mm_setr_ps(
-                s[plane][CORNERS[l][corner]],
-                s[plane][CORNERS[l + 1][corner]],
-                s[plane][CORNERS[l + 2][corner]],
-                s[plane][CORNERS[l + 3][corner]],
-            )
-        };
-        let (ax, ay, az) = (g(0, 0), g(0, 1), g(0, 2));
-        let (bx, by, bz) = (g(1, 0), g(1, 1), g(1, 2));
-        let (cx, cy, cz) = (g(2, 0), g(2, 1), g(2, 2));
+        let (ax, bx, cx) = corners(sh[half][0], sh[half + 1][0]);
+        let (ay, by, cy) = corners(sh[half][1], sh[half + 1][1]);
+        let (az, bz, cz) = corners(sh[half][2], sh[half + 1][2]);
         let mut u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
         let mut v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
         let mut wv = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
@@ -154,12 +192,22 @@ unsafe fn window_sse(r: &PreparedRay, w: &Window, lanes: u32, tmax: f32) -> Opti
             _mm_storeu_ps(uu.as_mut_ptr(), u);
             _mm_storeu_ps(vv.as_mut_ptr(), v);
             _mm_storeu_ps(ww.as_mut_ptr(), wv);
+            if !stored {
+                for (y, row) in sh.iter().enumerate() {
+                    for (a, v) in row.iter().enumerate() {
+                        _mm_storeu_ps(s[a].as_mut_ptr().add(4 * y), *v);
+                    }
+                }
+                stored = true;
+            }
+            // Vertex `3 y + x` of the window is lane `x` of row `y`: index `4 y + x`.
+            let at = |i: usize| 4 * (i / 3) + i % 3;
             let mut z = zeros;
             while z != 0 {
                 let j = z.trailing_zeros() as usize;
                 z &= z - 1;
                 let c = CORNERS[4 * half + j];
-                let p = |i: usize| [s[0][c[i]], s[1][c[i]]];
+                let p = |i: usize| [s[0][at(c[i])], s[1][at(c[i])]];
                 let e = exact_edges(p(0), p(1), p(2));
                 (uu[j], vv[j], ww[j]) = (e[0], e[1], e[2]);
             }
@@ -293,8 +341,21 @@ mod tests {
                 continue;
             }
             let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
+            // Rows four values apart (the fourth a stray value), planes twelve apart.
+            let mut coords = vec![f32::NAN; 3 * 12 + 4];
+            for a in 0..3 {
+                for k in 0..9 {
+                    coords[a * 12 + 4 * (k / 3) + k % 3] = w[a][k];
+                }
+            }
+            let rows = Rows {
+                coords: &coords,
+                plane: 12,
+                offs: [0, 4, 8],
+            };
+            assert_eq!(rows.gather(), w);
             for tmax in [f32::INFINITY, 0.999, 1.0] {
-                let a = window(&r, &w, lanes, tmax);
+                let a = window(&r, &rows, lanes, tmax);
                 let b = window_scalar(&r, &w, lanes, tmax);
                 let bits = |h: Option<LaneHit>| {
                     h.map(|(l, t, b1, b2)| (l, t.to_bits(), b1.to_bits(), b2.to_bits()))
