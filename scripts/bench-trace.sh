@@ -30,7 +30,7 @@ for config in $CONFIGS; do
 import json, sys
 j = json.loads(sys.argv[3])
 cols = [sys.argv[1], sys.argv[2], j["threads"], format(j["triangles"], ","), round(j["table_ms"]),
-        round(j["dice_ms"]), round(j["bvh_ms"]), round(j["bytes_per_triangle"]),
+        round(j["dice_ms"]), round(j["grid_ms"]), round(j["bytes_per_triangle"]),
         "%.2f" % j["coherent_mrays_per_s"], "%.2f" % j["incoherent_mrays_per_s"],
         "%.2f" % j["incoherent_anyhit_mrays_per_s"]]
 print("| " + " | ".join(str(c) for c in cols) + " |")

@@ -34,11 +34,12 @@
 //! ```
 
 use crate::bvh::Ray64;
-use crate::bvh::{Hit, MeshBvh, Ray};
+use crate::bvh::{Hit, Ray};
 use crate::coord::FaceCoord;
 use crate::dice::{dice, DiceOptions, DicedMesh};
 use crate::error::Result;
 use crate::exact::{ExactTrace, ExactTracer};
+use crate::grid::GridMesh;
 use crate::mesh::obj::read_obj;
 use crate::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
 use crate::patch::{PatchOptions, PatchTable, Sample};
@@ -183,24 +184,25 @@ impl Surface {
         Ok(self.exact_tracer()?.trace(ray))
     }
 
-    /// The diced surface under a watertight BVH, ready for ray queries.
+    /// The diced surface in the grid tracing core ([`crate::grid`]), ready for watertight ray
+    /// queries.
     pub fn bvh(&self, options: &DiceOptions) -> Result<TracedSurface> {
         Ok(TracedSurface {
-            bvh: MeshBvh::build(self.dice(options)?),
+            bvh: GridMesh::build(&self.dice(options)?),
         })
     }
 }
 
-/// A [`Surface`] diced and built into a BVH: watertight ray queries (no ray from inside a
-/// closed surface leaks).
+/// A [`Surface`] diced into grid blocks under a BVH ([`GridMesh`]): watertight ray queries (no
+/// ray from inside a closed surface leaks).
 #[derive(Debug)]
 pub struct TracedSurface {
-    bvh: MeshBvh,
+    bvh: GridMesh,
 }
 
 impl TracedSurface {
-    /// The BVH (and through it the diced mesh).
-    pub fn mesh_bvh(&self) -> &MeshBvh {
+    /// The grid core.
+    pub fn grid(&self) -> &GridMesh {
         &self.bvh
     }
 

@@ -2,12 +2,16 @@
 //! directions (≥ 10^6 per shape and rate), rays aimed exactly at diced vertices and edge
 //! midpoints, rays through extraordinary vertices and along a cube's diagonals — at rates 1, 2,
 //! 4, 16 and 64, at the origin and translated to (148376, 1234, −223423). The count of misses
-//! must be 0, for closest-hit and for any-hit queries.
+//! must be 0, for closest-hit and for any-hit queries, in the grid tracing core
+//! ([`GridMesh`]; `tests/grid.rs` checks that the triangle BVH the GPU mirrors answers
+//! hit or miss alike).
 
 mod common;
 
-use limitray::bvh::{MeshBvh, Ray};
+use limitray::bvh::Ray;
+use limitray::dice::DicedMesh;
 use limitray::dice::{dice, DiceOptions, DiceRate};
+use limitray::grid::GridMesh;
 use limitray::harness::probe::{aimed_rays, count_leaks, inside_origins, sphere_dirs};
 use limitray::mesh::obj::read_obj;
 use limitray::mesh::ControlMesh;
@@ -18,7 +22,13 @@ const FAR: [f64; 3] = [148376.0, 1234.0, -223423.0];
 /// Triangle budget per case: shapes whose dicing at a rate exceeds it skip that rate (printed).
 const MAX_TRIANGLES: usize = 4_000_000;
 
-fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, MeshBvh) {
+/// A diced mesh and its grid core.
+struct Built {
+    diced: DicedMesh,
+    grid: GridMesh,
+}
+
+fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, Built) {
     let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
     let d = dice(
         &table,
@@ -29,7 +39,8 @@ fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, MeshBvh) {
         },
     )
     .unwrap();
-    (table, MeshBvh::build(d))
+    let grid = GridMesh::build(&d);
+    (table, Built { diced: d, grid })
 }
 
 fn translated(mesh: &ControlMesh, by: [f64; 3]) -> ControlMesh {
@@ -43,8 +54,9 @@ fn translated(mesh: &ControlMesh, by: [f64; 3]) -> ControlMesh {
 }
 
 /// Runs every probe on one diced mesh; returns the rays cast. Panics on any miss.
-fn probe(name: &str, bvh: &MeshBvh, diag: f64, random_rays: usize) -> usize {
-    let d = &bvh.diced;
+fn probe(name: &str, built: &Built, diag: f64, random_rays: usize) -> usize {
+    let d = &built.diced;
+    let bvh = &built.grid;
     // Far from the origin a thin shape is only a few float steps thick and few candidate
     // points are certainly inside: one is enough, it then casts all the rays.
     let origins = inside_origins(d, 8, 2e-3 * diag, 7);
@@ -107,10 +119,10 @@ fn cube_diagonals_and_grid_vertices() {
                     Ray::new(c, [s(1), s(2), s(4)])
                 })
                 .collect();
-            let l = count_leaks(&bvh, &rays);
+            let l = count_leaks(&bvh.grid, &rays);
             assert_eq!((l.missed, l.missed_any), (0, 0), "rate {rate}, at {by:?}");
             // From the centre to every diced vertex and edge midpoint.
-            let l = count_leaks(&bvh, &aimed_rays(&bvh.diced, c, usize::MAX));
+            let l = count_leaks(&bvh.grid, &aimed_rays(&bvh.diced, c, usize::MAX));
             assert_eq!((l.missed, l.missed_any), (0, 0), "rate {rate}, at {by:?}");
             let total = probe(&format!("cube rate {rate} at {by:?}"), &bvh, 3.5, 1_000_000);
             assert!(total >= 1_000_000);

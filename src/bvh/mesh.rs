@@ -175,6 +175,8 @@ impl MeshBvh {
             boxes: &self.boxes,
             nodes: &self.cwbvh.nodes,
             tris: &self.tri_verts,
+            records: (&[], std::ptr::null(), 0, 0, 0),
+            extra: [(&[], std::ptr::null(), 0, 0); 2],
         };
         walk(&self.cwbvh, self.depth, pf, r, leaf);
     }
@@ -340,6 +342,25 @@ pub struct Prefetch<'a> {
     pub nodes: &'a [CwBvhNode],
     /// Leaf-ordered triangles (empty for the top level).
     pub tris: &'a [[[f32; 3]; 3]],
+    /// Other leaf records: leaf position → record index, and the records' first cache lines
+    /// (`(base, stride, count, lines)`; count 0: none).
+    pub records: (&'a [u32], *const u8, usize, usize, usize),
+    /// Two more parts of each record elsewhere: per record, its offset in `stride`s from
+    /// `base` (`u32::MAX`: none), and the lines to fetch (`(offsets, base, stride, lines)`).
+    pub extra: [(&'a [u32], *const u8, usize, usize); 2],
+}
+
+impl<'a> Prefetch<'a> {
+    /// Prefetches nothing for leaves.
+    pub fn nodes_only(boxes: &'a [WideBoxes], nodes: &'a [CwBvhNode]) -> Prefetch<'a> {
+        Prefetch {
+            boxes,
+            nodes,
+            tris: &[],
+            records: (&[], std::ptr::null(), 0, 0, 0),
+            extra: [(&[], std::ptr::null(), 0, 0); 2],
+        }
+    }
 }
 
 /// Scalar reference of [`wide_hitmask`].
@@ -412,6 +433,25 @@ unsafe fn wide_hitmask_sse(
                     let p = t.as_ptr() as *const i8;
                     _mm_prefetch::<_MM_HINT_T0>(p);
                     _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+                }
+                let (index, base, stride, count, lines) = pf.records;
+                if let Some(&i) = index.get(start as usize) {
+                    if (i as usize) < count {
+                        let p = base.add(i as usize * stride) as *const i8;
+                        for l in 0..lines {
+                            _mm_prefetch::<_MM_HINT_T0>(p.add(64 * l));
+                        }
+                        for (offsets, base2, stride2, lines2) in pf.extra {
+                            if let Some(&o) = offsets.get(i as usize) {
+                                if o != u32::MAX {
+                                    let p = base2.add(o as usize * stride2) as *const i8;
+                                    for l in 0..lines2 {
+                                        _mm_prefetch::<_MM_HINT_T0>(p.add(64 * l));
+                                    }
+                                }
+                            }
+                        }
+                    }
                 }
             } else {
                 let i = node.child_node_index(c) as usize;
@@ -682,11 +722,7 @@ mod tests {
                         &r,
                         0x0707_0707,
                         tmax,
-                        Prefetch {
-                            boxes: &[],
-                            nodes: &[],
-                            tris: &[]
-                        }
+                        Prefetch::nodes_only(&[], &[])
                     ),
                     wide_hitmask_scalar(&node, &b, &r, 0x0707_0707, tmax)
                 );

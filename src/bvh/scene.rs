@@ -190,11 +190,7 @@ impl SceneBvh {
         let Some(r) = PreparedRay::new(ray) else {
             return;
         };
-        let pf = super::mesh::Prefetch {
-            boxes: &self.top_boxes,
-            nodes: &self.top.nodes,
-            tris: &[],
-        };
+        let pf = super::mesh::Prefetch::nodes_only(&self.top_boxes, &self.top.nodes);
         super::mesh::walk(&self.top, self.top_depth, pf, &r, |li, tmax| {
             leaf(self.top_index[li], tmax)
         });

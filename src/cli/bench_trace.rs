@@ -1,9 +1,10 @@
-//! `limitray bench-trace`: patch table, dicing and BVH build times, and ray queries per second.
+//! `limitray bench-trace`: patch table, dicing and grid-core build times, and ray queries per
+//! second.
 
 use super::args::{MeshSource, ThreadArgs};
-use crate::bvh::MeshBvh;
 use crate::dice::{dice, DiceOptions, DiceRate};
 use crate::error::Result;
+use crate::grid::GridMesh;
 use crate::harness::rays::{camera_rays, random_rays};
 use crate::patch::{PatchOptions, PatchTable};
 use rayon::prelude::*;
@@ -45,7 +46,7 @@ fn round(x: f64, digits: i32) -> f64 {
     (x * s).round() / s
 }
 
-/// Runs `limitray bench-trace`: dicing, BVH build, and closest-hit rays/s, as one JSON line.
+/// Runs `limitray bench-trace`: dicing, grid build, and closest-hit rays/s, as one JSON line.
 pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
     let (_, mesh) = args.source.load()?;
     let threads = args.threads.count();
@@ -63,7 +64,8 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
         )?;
         let t2 = std::time::Instant::now();
         let tris = d.triangles.len();
-        let bvh = MeshBvh::build(d);
+        let bvh = GridMesh::build(&d);
+        drop(d);
         let t3 = std::time::Instant::now();
         let bounds = bvh.bounds();
         let ms =
@@ -73,9 +75,10 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             "threads": threads,
             "table_ms": ms(t0, t1),
             "dice_ms": ms(t1, t2),
-            "bvh_ms": ms(t2, t3),
-            "bvh_nodes": bvh.cwbvh.nodes.len(),
-            "widened_planes": bvh.widened_planes,
+            "grid_ms": ms(t2, t3),
+            "blocks": bvh.blocks.len(),
+            "loose_triangles": bvh.loose.len(),
+            "top_nodes": bvh.top.nodes.len(),
             "bytes_per_triangle": round(bvh.bytes() as f64 / tris.max(1) as f64, 1),
         });
         let sets = [
@@ -85,10 +88,10 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
         for (name, rays) in &sets {
             let mut hits = 0;
             let med = median_secs(args.reps, || {
-                hits = bvh
-                    .intersect_batch(rays)
-                    .iter()
-                    .filter(|x| x.is_some())
+                hits = rays
+                    .par_iter()
+                    .with_min_len(256)
+                    .filter(|r| bvh.intersect(r).is_some())
                     .count();
             });
             out[format!("{name}_mrays_per_s")] = round(rays.len() as f64 / med / 1e6, 3).into();

@@ -14,12 +14,15 @@ pub const BLOCK: usize = 8;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct Block {
+    /// The hierarchy's first node: the windows of a block of at most 4×4 quads, else the
+    /// quadrants.
+    pub root: Box4,
     /// Offset of the `x` plane in the coordinates (`y`, `z` follow, one plane apart).
     pub vert: u32,
     /// Offset of the first vertex's normal.
     pub normal: u32,
-    /// Offset of the first [`Box4`]: one (the windows) for blocks of at most 4×4 quads, else
-    /// five (the quadrants, then each quadrant's windows).
+    /// Offset of the quadrants' [`Box4`] nodes (four, of their windows) when the block has
+    /// more than 4×4 quads.
     pub boxes: u32,
     /// Offset of the per-triangle levels (two per quad, row by row).
     pub level: u32,
@@ -52,12 +55,12 @@ impl Block {
         self.cols as usize > BLOCK / 2 || self.rows as usize > BLOCK / 2
     }
 
-    /// Number of [`Box4`] nodes.
+    /// Number of [`Box4`] nodes besides the root.
     pub fn num_boxes(&self) -> usize {
         if self.two_level() {
-            5
+            4
         } else {
-            1
+            0
         }
     }
 
@@ -92,7 +95,7 @@ pub enum Slot {
     Window(usize, usize),
 }
 
-/// Child `c` of box node `node` of block `b`.
+/// Child `c` of box node `node` of block `b` (node 0: the root; node `1 + q`: quadrant `q`).
 #[inline(always)]
 pub fn slot(b: &Block, node: usize, c: usize) -> Slot {
     let (cx, cy) = (c % 2, c / 2);
@@ -106,7 +109,8 @@ pub fn slot(b: &Block, node: usize, c: usize) -> Slot {
     }
 }
 
-/// Builds the boxes of a block whose vertex `(x, y)` is `p(x, y)`.
+/// Builds the boxes of a block whose vertex `(x, y)` is `p(x, y)`: the root, then the
+/// quadrants' nodes if any.
 pub fn block_boxes(b: &Block, p: impl Fn(usize, usize) -> [f32; 3]) -> Vec<Box4> {
     let [wc, wr] = b.windows();
     let (cols, rows) = (b.cols as usize, b.rows as usize);

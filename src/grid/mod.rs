@@ -56,8 +56,8 @@ pub struct Loose {
 pub struct GridMesh {
     /// Block headers.
     pub blocks: Vec<Block>,
-    /// Vertex coordinates of all blocks (per block: `x`, `y`, `z` planes), then four padding
-    /// values (window rows are read four values at a time).
+    /// Vertex coordinates of all blocks (per block, row by row: the row's `x`, then `y`, then
+    /// `z` values), then four padding values (window rows are read four values at a time).
     pub coords: Vec<f32>,
     /// Octahedral vertex normals of all blocks.
     pub normals: Vec<u32>,
@@ -73,6 +73,11 @@ pub struct GridMesh {
     pub top_boxes: Vec<WideBoxes>,
     /// Top-level leaf order → primitive.
     pub top_index: Vec<u32>,
+    /// Per block: offset of its quadrant nodes in `boxes` (`u32::MAX`: none), for the
+    /// traversal's prefetch.
+    pub quadrants: Vec<u32>,
+    /// Per block: offset of its coordinates, for the traversal's prefetch.
+    pub verts: Vec<u32>,
     /// Levels of the top-level hierarchy.
     pub depth: usize,
     /// Number of triangles.
@@ -174,9 +179,8 @@ fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
                 for x in 0..=cols {
                     let v = vertex(x0 + x, y0 + y);
                     let p = d.positions[v];
-                    let i = y * (cols + 1) + x;
                     for a in 0..3 {
-                        coords[a * nv + i] = p[a];
+                        coords[(3 * y + a) * (cols + 1) + x] = p[a];
                         bounds[0][a] = bounds[0][a].min(p[a]);
                         bounds[1][a] = bounds[1][a].max(p[a]);
                     }
@@ -184,8 +188,7 @@ fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
                 }
             }
             let boxes = block_boxes(&header, |x, y| {
-                let i = y * (cols + 1) + x;
-                [coords[i], coords[nv + i], coords[2 * nv + i]]
+                std::array::from_fn(|a| coords[(3 * y + a) * (cols + 1) + x])
             });
             let mut levels = Vec::with_capacity(2 * cols * rows);
             for y in 0..rows {
@@ -209,13 +212,15 @@ fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
 }
 
 impl GridMesh {
-    /// Builds the grid mesh of `d`; the diced mesh is not kept.
+    /// Builds the grid mesh of `d`; the diced mesh is not kept. Blocks and loose triangles
+    /// are stored in the order of the top level's leaves.
     pub fn build(d: &DicedMesh) -> GridMesh {
-        let data: Vec<Vec<BlockData>> = d
+        let data: Vec<BlockData> = d
             .grids
             .par_iter()
             .filter(|g| g.part.quads[0] > 0 && g.part.quads[1] > 0)
             .map(|g| region_blocks(d, g))
+            .flatten_iter()
             .collect();
         let mut covered = vec![false; d.triangles.len()];
         for g in &d.grids {
@@ -227,22 +232,8 @@ impl GridMesh {
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
             ..GridMesh::default()
         };
-        let nblocks: usize = data.iter().map(|v| v.len()).sum();
-        m.blocks.reserve(nblocks);
-        let mut prim_boxes: Vec<PrimBox> = Vec::with_capacity(nblocks);
-        for b in data.into_iter().flatten() {
-            let mut h = b.header;
-            h.vert = m.coords.len() as u32;
-            h.normal = m.normals.len() as u32;
-            h.boxes = m.boxes.len() as u32;
-            h.level = m.levels.len() as u32;
-            m.coords.extend_from_slice(&b.coords);
-            m.normals.extend_from_slice(&b.normals);
-            m.boxes.extend_from_slice(&b.boxes);
-            m.levels.extend_from_slice(&b.levels);
-            m.blocks.push(h);
-            prim_boxes.push(PrimBox(b.bounds));
-        }
+        let mut prim_boxes: Vec<PrimBox> = data.iter().map(|b| PrimBox(b.bounds)).collect();
+        let mut loose = Vec::new();
         for (i, t) in d.triangles.iter().enumerate() {
             if covered[i] {
                 continue;
@@ -257,7 +248,7 @@ impl GridMesh {
                 }
             }
             prim_boxes.push(PrimBox(b));
-            m.loose.push(Loose {
+            loose.push(Loose {
                 p,
                 n: t.map(|v| oct_encode(d.normals[v as usize])),
                 uv: info.uv,
@@ -267,8 +258,6 @@ impl GridMesh {
                 level: info.level,
             });
         }
-        // Window rows are read four values at a time: the last plane's last row reads past it.
-        m.coords.extend_from_slice(&[0.0; 4]);
         for b in &prim_boxes {
             for a in 0..3 {
                 m.bounds[0][a] = m.bounds[0][a].min(b.0[0][a]);
@@ -276,6 +265,7 @@ impl GridMesh {
             }
         }
         if prim_boxes.is_empty() {
+            m.coords.extend_from_slice(&[0.0; 4]);
             return m;
         }
         let mut params = BvhBuildParams::medium_build();
@@ -284,9 +274,8 @@ impl GridMesh {
         let mut top = crate::bvh::mesh::build_deep(|| {
             build_cwbvh(&prim_boxes, params, &mut std::time::Duration::default())
         });
-        m.top_index = top.primitive_indices.clone();
-        let corners: Vec<[[f32; 3]; 3]> = m
-            .top_index
+        let corners: Vec<[[f32; 3]; 3]> = top
+            .primitive_indices
             .iter()
             .map(|&i| {
                 let b = prim_boxes[i as usize].0;
@@ -294,10 +283,75 @@ impl GridMesh {
             })
             .collect();
         let (_, boxes, depth) = make_conservative(&mut top, &corners);
+        // Place blocks and loose triangles in leaf order: blocks first, loose after.
+        let nblocks = data.len();
+        let mut data: Vec<Option<BlockData>> = data.into_iter().map(Some).collect();
+        let mut loose: Vec<Option<Loose>> = loose.into_iter().map(Some).collect();
+        let total_coords: usize = data.iter().flatten().map(|b| b.coords.len()).sum();
+        m.coords.reserve(total_coords + 4);
+        m.blocks.reserve(nblocks);
+        let mut loose_order = Vec::new();
+        for &prim in &top.primitive_indices {
+            let prim = prim as usize;
+            if prim < nblocks {
+                let b = data[prim].take().expect("each block is one leaf");
+                let mut h = b.header;
+                h.root = b.boxes[0];
+                h.vert = m.coords.len() as u32;
+                h.normal = m.normals.len() as u32;
+                h.boxes = m.boxes.len() as u32;
+                h.level = m.levels.len() as u32;
+                m.coords.extend_from_slice(&b.coords);
+                m.normals.extend_from_slice(&b.normals);
+                m.boxes.extend_from_slice(&b.boxes[1..]);
+                m.levels.extend_from_slice(&b.levels);
+                m.top_index.push(m.blocks.len() as u32);
+                m.quadrants
+                    .push(if h.two_level() { h.boxes } else { u32::MAX });
+                m.verts.push(h.vert);
+                m.blocks.push(h);
+            } else {
+                m.top_index.push((nblocks + loose_order.len()) as u32);
+                loose_order.push(prim - nblocks);
+            }
+        }
+        m.loose = loose_order
+            .into_iter()
+            .map(|i| loose[i].take().expect("each loose triangle is one leaf"))
+            .collect();
+        // Window rows are read four values at a time: the last plane's last row reads past it.
+        m.coords.extend_from_slice(&[0.0; 4]);
         m.top_boxes = boxes;
         m.depth = depth;
         m.top = top;
         m
+    }
+
+    /// What the top-level traversal prefetches: the block records of the leaves it enters.
+    fn prefetch(&self) -> Prefetch<'_> {
+        let mut pf = Prefetch::nodes_only(&self.top_boxes, &self.top.nodes);
+        pf.records = (
+            &self.top_index,
+            self.blocks.as_ptr() as *const u8,
+            std::mem::size_of::<Block>(),
+            self.blocks.len(),
+            std::mem::size_of::<Block>().div_ceil(64),
+        );
+        pf.extra = [
+            (
+                &self.quadrants,
+                self.boxes.as_ptr() as *const u8,
+                std::mem::size_of::<Box4>(),
+                (4 * std::mem::size_of::<Box4>()).div_ceil(64),
+            ),
+            (
+                &self.verts,
+                self.coords.as_ptr() as *const u8,
+                4,
+                (12 * (BLOCK + 1) * (BLOCK + 1)).div_ceil(64),
+            ),
+        ];
+        pf
     }
 
     /// Memory of everything the queries read, in bytes.
@@ -311,6 +365,8 @@ impl GridMesh {
             + self.top.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
             + self.top_boxes.len() * std::mem::size_of::<WideBoxes>()
             + self.top_index.len() * 4
+            + self.quadrants.len() * 4
+            + self.verts.len() * 4
     }
 
     /// Bounds of the mesh.
@@ -324,13 +380,13 @@ impl GridMesh {
     #[inline(always)]
     fn window(&self, b: &Block, wx: usize, wy: usize) -> (Rows<'_>, u32) {
         let (cols, rows) = (b.cols as usize, b.rows as usize);
-        let offs = std::array::from_fn(|y| (2 * wy + y).min(rows) * (cols + 1) + 2 * wx);
+        let offs = std::array::from_fn(|y| 3 * (2 * wy + y).min(rows) * (cols + 1) + 2 * wx);
         let qx = (cols - 2 * wx).min(2);
         let qy = (rows - 2 * wy).min(2);
         (
             Rows {
                 coords: &self.coords[b.vert as usize..],
-                plane: b.num_vertices(),
+                plane: cols + 1,
                 offs,
             },
             lane_mask(qx, qy),
@@ -349,7 +405,7 @@ impl GridMesh {
     ) -> (f32, bool) {
         let b = &self.blocks[bi];
         let boxes = &self.boxes[b.boxes as usize..b.boxes as usize + b.num_boxes()];
-        let (mask, near) = test4(&boxes[0], r, tmax);
+        let (mask, near) = test4(&b.root, r, tmax);
         let (order, n) = front_to_back(mask, &near);
         for &c in &order[..n] {
             let c = c as usize;
@@ -365,7 +421,7 @@ impl GridMesh {
                     }
                 }
                 Slot::Node(q) => {
-                    let (m2, near2) = test4(&boxes[q], r, tmax);
+                    let (m2, near2) = test4(&boxes[q - 1], r, tmax);
                     let (order2, n2) = front_to_back(m2, &near2);
                     for &c2 in &order2[..n2] {
                         let c2 = c2 as usize;
@@ -391,11 +447,7 @@ impl GridMesh {
         let r = PreparedRay::new(ray)?;
         let mut best: Option<Best> = None;
         let nblocks = self.blocks.len();
-        let pf = Prefetch {
-            boxes: &self.top_boxes,
-            nodes: &self.top.nodes,
-            tris: &[],
-        };
+        let pf = self.prefetch();
         walk(&self.top, self.depth, pf, &r, |li, tmax| {
             let prim = self.top_index[li] as usize;
             if prim < nblocks {
@@ -449,11 +501,7 @@ impl GridMesh {
         };
         let mut hit = false;
         let nblocks = self.blocks.len();
-        let pf = Prefetch {
-            boxes: &self.top_boxes,
-            nodes: &self.top.nodes,
-            tris: &[],
-        };
+        let pf = self.prefetch();
         walk(&self.top, self.depth, pf, &r, |li, tmax| {
             let prim = self.top_index[li] as usize;
             if prim < nblocks {
@@ -490,10 +538,10 @@ impl GridMesh {
                 } else {
                     [(x, y), (x + 1, y + 1), (x, y + 1)]
                 };
-                let nv = b.num_vertices();
-                let idx = corners.map(|(cx, cy)| cy * (b.cols as usize + 1) + cx);
+                let w = b.cols as usize + 1;
+                let idx = corners.map(|(cx, cy)| cy * w + cx);
                 let c = &self.coords[b.vert as usize..];
-                let p = idx.map(|i| [c[i], c[nv + i], c[2 * nv + i]]);
+                let p = corners.map(|(cx, cy)| std::array::from_fn(|a| c[(3 * cy + a) * w + cx]));
                 let n = idx.map(|i| oct_decode(self.normals[b.normal as usize + i]));
                 let uv = corners.map(|(cx, cy)| b.uv(cx, cy));
                 let level = self.levels[b.level as usize + 2 * (y * b.cols as usize + x) + h];

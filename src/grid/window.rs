@@ -65,17 +65,17 @@ pub fn window_scalar(r: &PreparedRay, w: &Window, lanes: u32, tmax: f32) -> Opti
     best
 }
 
-/// Where a window's vertices lie in a block: the block's coordinates (`x`, `y`, `z` planes of
-/// `plane` values each, followed by at least three more values) and the plane offsets of the
-/// window's three rows. Each row's three vertices are consecutive; a fourth value is read and
-/// ignored.
+/// Where a window's vertices lie in a block: the block's coordinates and the offsets of the
+/// window's three rows; a row's `x` values start at its offset, its `y` values `plane` later,
+/// its `z` values `2 plane` later. Each row's three vertices are consecutive; a fourth value
+/// is read and ignored (at least three values must follow the last).
 #[derive(Clone, Copy, Debug)]
 pub struct Rows<'a> {
     /// The block's coordinates, to the end of the mesh's (padded) array.
     pub coords: &'a [f32],
-    /// Values per plane.
+    /// Distance from a row's `x` values to its `y` values, and from those to its `z` values.
     pub plane: usize,
-    /// Offset of each row's first vertex within a plane.
+    /// Offset of each row's first `x` value.
     pub offs: [usize; 3],
 }
 
