@@ -5,9 +5,8 @@
 //! octahedral normals; its hierarchy is implicit (quadrants, then 2×2-quad windows, boxes in
 //! [`node::Box4`]), and its leaf test runs on the eight triangles of a window at once
 //! ([`window`]). The triangles outside the grids (zippers between different rates, tiny
-//! domains) are *loose* triangles with their own records. An obvhs CWBVH over blocks and loose
-//! triangles is the top level, its boxes made exact and conservative as in
-//! [`crate::bvh::mesh`].
+//! domains) are *loose* triangles with their own records. A 4-wide BVH over blocks and loose
+//! triangles is the top level ([`top`]), its boxes exact.
 //!
 //! The vertices are the diced mesh's `f32` points, copied bit for bit: a vertex on a shared
 //! edge has the same bits in every block and loose triangle that holds it, and every triangle
@@ -17,19 +16,19 @@
 
 pub mod block;
 pub mod node;
+pub mod top;
 pub mod window;
 
-use crate::bvh::mesh::{make_conservative, normalize, walk, Prefetch, WideBoxes};
+use crate::bvh::mesh::normalize;
 use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion};
 use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK};
 use glam::Vec3A;
 use node::{front_to_back, test4, Box4};
-use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::cwbvh::CwBvh;
-use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
+use obvhs::{aabb::Aabb, Boundable};
 use rayon::prelude::*;
+use top::Top;
 use window::{lane_mask, Rows};
 
 /// A triangle outside the grids, with everything its hits need.
@@ -67,19 +66,14 @@ pub struct GridMesh {
     pub levels: Vec<u8>,
     /// Triangles outside the grids.
     pub loose: Vec<Loose>,
-    /// Top level over blocks (primitives `0..blocks.len()`) then loose triangles.
-    pub top: CwBvh,
-    /// Exact child boxes of the top-level nodes.
-    pub top_boxes: Vec<WideBoxes>,
-    /// Top-level leaf order → primitive.
-    pub top_index: Vec<u32>,
+    /// Top level over blocks (primitives `0..blocks.len()`) then loose triangles (primitive
+    /// `blocks.len() + i`).
+    pub top: Top,
     /// Per block: offset of its quadrant nodes in `boxes` (`u32::MAX`: none), for the
     /// traversal's prefetch.
     pub quadrants: Vec<u32>,
     /// Per block: offset of its coordinates, for the traversal's prefetch.
     pub verts: Vec<u32>,
-    /// Levels of the top-level hierarchy.
-    pub depth: usize,
     /// Number of triangles.
     pub triangles: usize,
     /// Bounds of all vertices (`[min, max]`; inverted when empty).
@@ -268,31 +262,30 @@ impl GridMesh {
             m.coords.extend_from_slice(&[0.0; 4]);
             return m;
         }
-        let mut params = BvhBuildParams::medium_build();
-        params.pre_split = false;
-        params.max_prims_per_leaf = 1;
-        let mut top = crate::bvh::mesh::build_deep(|| {
-            build_cwbvh(&prim_boxes, params, &mut std::time::Duration::default())
-        });
-        let corners: Vec<[[f32; 3]; 3]> = top
-            .primitive_indices
-            .iter()
-            .map(|&i| {
-                let b = prim_boxes[i as usize].0;
-                [b[0], b[1], b[1]]
-            })
-            .collect();
-        let (_, boxes, depth) = make_conservative(&mut top, &corners);
-        // Place blocks and loose triangles in leaf order: blocks first, loose after.
+        let bounds: Vec<[[f32; 3]; 2]> = prim_boxes.iter().map(|b| b.0).collect();
+        let mut top = Top::build(&bounds);
+        // Place blocks and loose triangles in the order a depth-first walk meets them.
+        let mut order = Vec::with_capacity(bounds.len());
+        let mut stack = vec![top.root];
+        while let Some(r) = stack.pop() {
+            if r == top::EMPTY {
+                continue;
+            }
+            if r & top::LEAF != 0 {
+                order.push((r & !top::LEAF) as usize);
+            } else {
+                stack.extend(top.nodes[r as usize].child.iter().rev());
+            }
+        }
         let nblocks = data.len();
         let mut data: Vec<Option<BlockData>> = data.into_iter().map(Some).collect();
         let mut loose: Vec<Option<Loose>> = loose.into_iter().map(Some).collect();
         let total_coords: usize = data.iter().flatten().map(|b| b.coords.len()).sum();
         m.coords.reserve(total_coords + 4);
         m.blocks.reserve(nblocks);
+        let mut new_id = vec![0u32; bounds.len()];
         let mut loose_order = Vec::new();
-        for &prim in &top.primitive_indices {
-            let prim = prim as usize;
+        for &prim in &order {
             if prim < nblocks {
                 let b = data[prim].take().expect("each block is one leaf");
                 let mut h = b.header;
@@ -305,13 +298,13 @@ impl GridMesh {
                 m.normals.extend_from_slice(&b.normals);
                 m.boxes.extend_from_slice(&b.boxes[1..]);
                 m.levels.extend_from_slice(&b.levels);
-                m.top_index.push(m.blocks.len() as u32);
+                new_id[prim] = m.blocks.len() as u32;
                 m.quadrants
                     .push(if h.two_level() { h.boxes } else { u32::MAX });
                 m.verts.push(h.vert);
                 m.blocks.push(h);
             } else {
-                m.top_index.push((nblocks + loose_order.len()) as u32);
+                new_id[prim] = (nblocks + loose_order.len()) as u32;
                 loose_order.push(prim - nblocks);
             }
         }
@@ -319,39 +312,52 @@ impl GridMesh {
             .into_iter()
             .map(|i| loose[i].take().expect("each loose triangle is one leaf"))
             .collect();
+        let renumber = |r: top::Ref| {
+            if r != top::EMPTY && r & top::LEAF != 0 {
+                top::LEAF | new_id[(r & !top::LEAF) as usize]
+            } else {
+                r
+            }
+        };
+        top.root = renumber(top.root);
+        for n in &mut top.nodes {
+            n.child = n.child.map(renumber);
+        }
         // Window rows are read four values at a time: the last plane's last row reads past it.
         m.coords.extend_from_slice(&[0.0; 4]);
-        m.top_boxes = boxes;
-        m.depth = depth;
         m.top = top;
         m
     }
 
-    /// What the top-level traversal prefetches: the block records of the leaves it enters.
-    fn prefetch(&self) -> Prefetch<'_> {
-        let mut pf = Prefetch::nodes_only(&self.top_boxes, &self.top.nodes);
-        pf.records = (
-            &self.top_index,
-            self.blocks.as_ptr() as *const u8,
-            std::mem::size_of::<Block>(),
-            self.blocks.len(),
-            std::mem::size_of::<Block>().div_ceil(64),
-        );
-        pf.extra = [
-            (
-                &self.quadrants,
-                self.boxes.as_ptr() as *const u8,
-                std::mem::size_of::<Box4>(),
-                (4 * std::mem::size_of::<Box4>()).div_ceil(64),
-            ),
-            (
-                &self.verts,
-                self.coords.as_ptr() as *const u8,
-                4,
-                (12 * (BLOCK + 1) * (BLOCK + 1)).div_ceil(64),
-            ),
-        ];
-        pf
+    /// Prefetches what visiting primitive `prim` reads first: a block's header and root, its
+    /// quadrant nodes and its vertices.
+    #[inline(always)]
+    fn prefetch(&self, prim: u32) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(b) = self.blocks.get(prim as usize) {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let lines = |p: *const i8, bytes: usize| {
+                for l in 0..bytes.div_ceil(64) {
+                    // SAFETY: prefetching never faults and has no effect on memory.
+                    unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * l)) };
+                }
+            };
+            lines(b as *const Block as *const i8, std::mem::size_of::<Block>());
+            let q = self.quadrants[prim as usize];
+            if q != u32::MAX {
+                lines(
+                    self.boxes.as_ptr().wrapping_add(q as usize) as *const i8,
+                    4 * std::mem::size_of::<Box4>(),
+                );
+            }
+            let v = self.verts[prim as usize] as usize;
+            lines(
+                self.coords.as_ptr().wrapping_add(v) as *const i8,
+                12 * b.num_vertices(),
+            );
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = prim;
     }
 
     /// Memory of everything the queries read, in bytes.
@@ -362,9 +368,7 @@ impl GridMesh {
             + self.boxes.len() * std::mem::size_of::<Box4>()
             + self.levels.len()
             + self.loose.len() * std::mem::size_of::<Loose>()
-            + self.top.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
-            + self.top_boxes.len() * std::mem::size_of::<WideBoxes>()
-            + self.top_index.len() * 4
+            + self.top.bytes()
             + self.quadrants.len() * 4
             + self.verts.len() * 4
     }
@@ -447,20 +451,42 @@ impl GridMesh {
         let r = PreparedRay::new(ray)?;
         let mut best: Option<Best> = None;
         let nblocks = self.blocks.len();
-        let pf = self.prefetch();
-        walk(&self.top, self.depth, pf, &r, |li, tmax| {
-            let prim = self.top_index[li] as usize;
-            if prim < nblocks {
-                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
-                    let (w, lanes) = self.window(b, wx, wy);
-                    if let Some((l, t, b1, b2)) = window::window(&r, &w, lanes, tmax) {
-                        let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
-                        let (x, y) = (2 * wx + qx, 2 * wy + qy);
-                        let id = b.triangle(x, y, h);
-                        if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+        self.top.walk(
+            &r,
+            r.tmax,
+            |prim, tmax| {
+                let prim = prim as usize;
+                if prim < nblocks {
+                    let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
+                        let (w, lanes) = self.window(b, wx, wy);
+                        if let Some((l, t, b1, b2)) = window::window(&r, &w, lanes, tmax) {
+                            let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
+                            let (x, y) = (2 * wx + qx, 2 * wy + qy);
+                            let id = b.triangle(x, y, h);
+                            if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+                                best = Some(Best {
+                                    at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
+                                    id,
+                                    t,
+                                    b1,
+                                    b2,
+                                });
+                                return (t, false);
+                            }
+                        }
+                        (tmax, false)
+                    };
+                    let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
+                    (t, false)
+                } else {
+                    let li = prim - nblocks;
+                    let tri = &self.loose[li];
+                    let [a, b, c] = tri.p;
+                    if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
+                        if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
                             best = Some(Best {
-                                at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
-                                id,
+                                at: Found::Loose(li as u32),
+                                id: tri.id,
                                 t,
                                 b1,
                                 b2,
@@ -469,28 +495,10 @@ impl GridMesh {
                         }
                     }
                     (tmax, false)
-                };
-                let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
-                (t, false)
-            } else {
-                let li = prim - nblocks;
-                let tri = &self.loose[li];
-                let [a, b, c] = tri.p;
-                if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
-                    if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
-                        best = Some(Best {
-                            at: Found::Loose(li as u32),
-                            id: tri.id,
-                            t,
-                            b1,
-                            b2,
-                        });
-                        return (t, false);
-                    }
                 }
-                (tmax, false)
-            }
-        });
+            },
+            |p| self.prefetch(p),
+        );
         best.map(|b| self.hit(b))
     }
 
@@ -501,21 +509,25 @@ impl GridMesh {
         };
         let mut hit = false;
         let nblocks = self.blocks.len();
-        let pf = self.prefetch();
-        walk(&self.top, self.depth, pf, &r, |li, tmax| {
-            let prim = self.top_index[li] as usize;
-            if prim < nblocks {
-                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
-                    let (w, lanes) = self.window(b, wx, wy);
-                    (tmax, window::window(&r, &w, lanes, tmax).is_some())
-                };
-                hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
-            } else {
-                let [a, b, c] = self.loose[prim - nblocks].p;
-                hit = intersect_prepared(&r, a, b, c, tmax).is_some();
-            }
-            (tmax, hit)
-        });
+        self.top.walk(
+            &r,
+            r.tmax,
+            |prim, tmax| {
+                let prim = prim as usize;
+                if prim < nblocks {
+                    let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
+                        let (w, lanes) = self.window(b, wx, wy);
+                        (tmax, window::window(&r, &w, lanes, tmax).is_some())
+                    };
+                    hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
+                } else {
+                    let [a, b, c] = self.loose[prim - nblocks].p;
+                    hit = intersect_prepared(&r, a, b, c, tmax).is_some();
+                }
+                (tmax, hit)
+            },
+            |p| self.prefetch(p),
+        );
         hit
     }
 

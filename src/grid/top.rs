@@ -1,0 +1,343 @@
+//! The top level over grid blocks and loose triangles: a 4-wide BVH collapsed from obvhs's
+//! binary PLOC build, with exact `f32` child boxes ([`Box4`]) and an ordered, distance-culled
+//! stack traversal.
+//!
+//! Each node's four boxes are the exact bounds of what lies below each child (recomputed from
+//! the primitives' boxes, never taken from the builder), so the conservative box test of
+//! [`crate::bvh::triangle::PreparedRay::hits_box`] can never cull a primitive the ray meets.
+
+use super::node::{test4, Box4};
+use crate::bvh::triangle::PreparedRay;
+use glam::Vec3A;
+use obvhs::bvh2::builder::build_bvh2;
+use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
+
+/// A child reference: a node index, or a primitive with [`LEAF`] set; [`EMPTY`] for none.
+pub type Ref = u32;
+/// Marks a primitive reference.
+pub const LEAF: u32 = 1 << 31;
+/// An absent child.
+pub const EMPTY: u32 = u32::MAX;
+
+/// A node: four child boxes and references.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct Node4 {
+    /// Child boxes (absent children: empty boxes).
+    pub boxes: Box4,
+    /// Child references.
+    pub child: [Ref; 4],
+}
+
+/// The top level.
+#[derive(Clone, Debug, Default)]
+pub struct Top {
+    /// Nodes (the root first, when the root is a node).
+    pub nodes: Vec<Node4>,
+    /// The root reference ([`EMPTY`] when there is nothing).
+    pub root: Ref,
+    /// Node levels on the longest path.
+    pub depth: usize,
+}
+
+struct PrimBox([[f32; 3]; 2]);
+
+impl Boundable for PrimBox {
+    fn aabb(&self) -> Aabb {
+        Aabb::new(Vec3A::from(self.0[0]), Vec3A::from(self.0[1]))
+    }
+}
+
+fn area(b: &Aabb) -> f32 {
+    let d = b.max - b.min;
+    if d.x < 0.0 {
+        return 0.0;
+    }
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+type Bounds = [[f32; 3]; 2];
+
+fn union(a: Bounds, b: Bounds) -> Bounds {
+    [
+        std::array::from_fn(|i| a[0][i].min(b[0][i])),
+        std::array::from_fn(|i| a[1][i].max(b[1][i])),
+    ]
+}
+
+const NONE: Bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+
+impl Top {
+    /// Builds the top level over primitives with bounds `boxes` (`[min, max]`).
+    pub fn build(boxes: &[[[f32; 3]; 2]]) -> Top {
+        if boxes.is_empty() {
+            return Top {
+                nodes: Vec::new(),
+                root: EMPTY,
+                depth: 0,
+            };
+        }
+        if boxes.len() == 1 {
+            let mut node = Node4 {
+                boxes: Box4::default(),
+                child: [LEAF, EMPTY, EMPTY, EMPTY],
+            };
+            node.boxes.include(0, boxes[0][0]);
+            node.boxes.include(0, boxes[0][1]);
+            return Top {
+                nodes: vec![node],
+                root: 0,
+                depth: 1,
+            };
+        }
+        let prims: Vec<PrimBox> = boxes.iter().map(|&b| PrimBox(b)).collect();
+        let mut params = BvhBuildParams::medium_build();
+        params.pre_split = false;
+        params.max_prims_per_leaf = 1;
+        let bvh2 = crate::bvh::mesh::build_deep(|| {
+            build_bvh2(&prims, params, &mut std::time::Duration::default())
+        });
+        let mut top = Top {
+            nodes: Vec::with_capacity(bvh2.nodes.len() / 3 + 1),
+            root: 0,
+            depth: 0,
+        };
+        // Iterative collapse: each entry is a binary node to become a 4-wide node at `slot`.
+        let leaf_ref = |n: usize, out: &mut Vec<Ref>| {
+            let node = &bvh2.nodes[n];
+            for i in 0..node.prim_count {
+                out.push(LEAF | bvh2.primitive_indices[(node.first_index + i) as usize]);
+            }
+        };
+        let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, 1)];
+        top.nodes.push(Node4 {
+            boxes: Box4::default(),
+            child: [EMPTY; 4],
+        });
+        while let Some((bin, slot, level)) = work.pop() {
+            top.depth = top.depth.max(level);
+            // Open the largest inner child until four children.
+            let mut kids: Vec<usize> = if bvh2.nodes[bin].is_leaf() {
+                vec![bin]
+            } else {
+                let l = bvh2.nodes[bin].first_index as usize;
+                vec![l, l + 1]
+            };
+            while kids.len() < 4 {
+                let Some((i, _)) = kids
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &k)| !bvh2.nodes[k].is_leaf())
+                    .max_by(|a, b| {
+                        area(bvh2.nodes[*a.1].aabb()).total_cmp(&area(bvh2.nodes[*b.1].aabb()))
+                    })
+                else {
+                    break;
+                };
+                let k = kids.swap_remove(i);
+                let l = bvh2.nodes[k].first_index as usize;
+                kids.push(l);
+                kids.push(l + 1);
+            }
+            let mut refs: Vec<Ref> = Vec::with_capacity(4);
+            for &k in &kids {
+                if bvh2.nodes[k].is_leaf() {
+                    leaf_ref(k, &mut refs);
+                } else {
+                    let idx = top.nodes.len();
+                    top.nodes.push(Node4 {
+                        boxes: Box4::default(),
+                        child: [EMPTY; 4],
+                    });
+                    refs.push(idx as Ref);
+                    work.push((k, idx, level + 1));
+                }
+            }
+            assert!(refs.len() <= 4, "a leaf holds one primitive");
+            for (c, r) in refs.into_iter().enumerate() {
+                top.nodes[slot].child[c] = r;
+            }
+        }
+        // Exact boxes, children before parents (children are pushed after their parent).
+        let mut content = vec![NONE; top.nodes.len()];
+        for n in (0..top.nodes.len()).rev() {
+            let mut node = top.nodes[n];
+            for c in 0..4 {
+                let r = node.child[c];
+                let b = if r == EMPTY {
+                    continue;
+                } else if r & LEAF != 0 {
+                    boxes[(r & !LEAF) as usize]
+                } else {
+                    assert!(r as usize > n, "children follow their parents");
+                    content[r as usize]
+                };
+                node.boxes.include(c, b[0]);
+                node.boxes.include(c, b[1]);
+                content[n] = union(content[n], b);
+            }
+            top.nodes[n] = node;
+        }
+        top
+    }
+
+    /// Bytes.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node4>()
+    }
+
+    /// Walks the top level front to back: `visit(prim, tmax)` for each primitive whose box the
+    /// ray meets within the current `tmax`, returning the new `tmax` and whether to stop;
+    /// `prefetch(prim)` when a primitive is pushed.
+    #[inline(always)]
+    pub fn walk(
+        &self,
+        r: &PreparedRay,
+        mut tmax: f32,
+        mut visit: impl FnMut(u32, f32) -> (f32, bool),
+        prefetch: impl Fn(u32),
+    ) {
+        if self.root == EMPTY {
+            return;
+        }
+        let mut stack = Stack::new();
+        stack.push((self.root, r.tmin));
+        while let Some((node, near)) = stack.pop() {
+            if near > tmax {
+                continue;
+            }
+            if node & LEAF != 0 {
+                let (t, stop) = visit(node & !LEAF, tmax);
+                tmax = t;
+                if stop {
+                    return;
+                }
+                continue;
+            }
+            let n = &self.nodes[node as usize];
+            let (mask, d) = test4(&n.boxes, r, tmax);
+            if mask == 0 {
+                continue;
+            }
+            // Push far to near: the nearest is popped first.
+            let (order, count) = super::node::front_to_back(mask, &d);
+            for &c in order[..count].iter().rev() {
+                let child = n.child[c as usize];
+                if child & LEAF != 0 {
+                    prefetch(child & !LEAF);
+                } else {
+                    prefetch_node(&self.nodes, child);
+                }
+                stack.push((child, d[c as usize]));
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn prefetch_node(nodes: &[Node4], i: u32) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(n) = nodes.get(i as usize) {
+        // SAFETY: prefetching a valid reference has no effect on memory.
+        unsafe {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let p = n as *const Node4 as *const i8;
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (nodes, i);
+}
+
+/// A traversal stack: a fixed array, spilling to the heap on degenerate hierarchies.
+struct Stack {
+    fixed: [(Ref, f32); 64],
+    len: usize,
+    spill: Vec<(Ref, f32)>,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Stack {
+        Stack {
+            fixed: [(0, 0.0); 64],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, e: (Ref, f32)) {
+        if self.len < self.fixed.len() {
+            self.fixed[self.len] = e;
+            self.len += 1;
+        } else {
+            self.spill.push(e);
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(Ref, f32)> {
+        if let Some(e) = self.spill.pop() {
+            return Some(e);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.fixed[self.len])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::Ray;
+    use crate::harness::rng::SplitMix64;
+
+    /// The walk visits every primitive whose box the ray meets (brute force over the boxes),
+    /// each once, on random boxes of many sizes.
+    #[test]
+    fn walk_finds_every_box_met() {
+        let mut rng = SplitMix64(21);
+        for n in [1usize, 2, 3, 5, 17, 300, 2000] {
+            let boxes: Vec<[[f32; 3]; 2]> = (0..n)
+                .map(|_| {
+                    let c: [f32; 3] = std::array::from_fn(|_| (rng.next_f64() * 10.0) as f32);
+                    let e: [f32; 3] = std::array::from_fn(|_| (rng.next_f64() * 0.5) as f32);
+                    [
+                        std::array::from_fn(|a| c[a] - e[a]),
+                        std::array::from_fn(|a| c[a] + e[a]),
+                    ]
+                })
+                .collect();
+            let top = Top::build(&boxes);
+            for i in 0..200 {
+                let o: [f32; 3] = std::array::from_fn(|_| (rng.next_f64() * 14.0 - 2.0) as f32);
+                let d: [f32; 3] = std::array::from_fn(|a| {
+                    if i % 7 == 0 && a == 1 {
+                        0.0
+                    } else {
+                        (rng.next_f64() - 0.5) as f32
+                    }
+                });
+                let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
+                let mut seen = vec![0u32; n];
+                top.walk(
+                    &r,
+                    f32::INFINITY,
+                    |p, t| {
+                        seen[p as usize] += 1;
+                        (t, false)
+                    },
+                    |_| {},
+                );
+                for (p, b) in boxes.iter().enumerate() {
+                    let want = r.hits_box(b[0], b[1], f32::INFINITY);
+                    assert_eq!(seen[p], u32::from(want), "n {n}, ray {i}, prim {p}");
+                }
+            }
+        }
+    }
+}
