@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Side-by-side benchmark against Embree 4.4 (issue 5): limitray, Embree on the same triangles,
-# Embree subdivision geometry at the same rate (and Embree's robust triangles), for
+# Side-by-side benchmark against Embree 4.4 (issues 5 and 14): limitray's grid core, its
+# triangle BVH, Embree on the same triangles, Embree subdivision geometry at the same rate (and
+# Embree's robust triangles, and limitray's reference intersector), for
 # catmark_car at rates 4 and 16, the generated 316 x 316 grid (99,856 faces) at rate 4 and the
 # 79 x 79 grid at rate 16 (the same 3.2 M triangles: the 316 grid at rate 16 would be 51 M
 # triangles, about 25 GB for the four engines at the ~500 bytes per triangle measured, more
@@ -22,33 +23,34 @@ bash scripts/setup-embree.sh
 cargo build --release --features embree --quiet
 BIN="$ROOT/target/release/limitray"
 
-echo "| mesh | rate | threads | triangles | engine | build ms | coherent Mrays/s | incoherent Mrays/s | build ×limitray | coherent ×limitray | incoherent ×limitray | leaks in place | leaks far |"
-echo "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+echo "| mesh | rate | threads | triangles | engine | build ms | coherent Mrays/s | incoherent Mrays/s | any-hit Mrays/s | bytes/triangle | build ×limitray | coherent ×limitray | incoherent ×limitray | any-hit ×limitray | leaks in place | leaks far |"
+echo "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
 for config in $CONFIGS; do
     mesh="${config%%:*}"
     rate="${config##*:}"
-    {
-        for t in $THREADS; do
-            if [[ $mesh == car ]]; then
-                args=("$CAR")
-            else
-                args=(--grid "$mesh")
-            fi
-            json="$("$BIN" bench "${args[@]}" --rate "$rate" --rays "$RAYS" --threads "$t" --reps "$REPS" --json)"
-            echo "$json" >&2
-            python3 - "$mesh" "$json" <<'PY'
+    for t in $THREADS; do
+        if [[ $mesh == car ]]; then
+            args=("$CAR")
+        else
+            args=(--grid "$mesh")
+        fi
+        json="$("$BIN" bench "${args[@]}" --rate "$rate" --rays "$RAYS" --threads "$t" --reps "$REPS" --json)"
+        echo "$json" >&2
+        python3 - "$mesh" "$json" <<'PY'
 import json, sys
-mesh, d = sys.argv[1], json.loads(sys.argv[2])
-name = "catmark_car" if mesh == "car" else "grid %s (%d faces)" % (mesh, d["faces"])
-base = d["engines"][0]
-for e in d["engines"]:
-    print("| %s | %d | %d | %d | %s | %.1f | %.2f | %.2f | %.3f | %.2f | %.2f | %d / %d | %d / %d |" % (
-        name, d["rate"], d["threads"], d["triangles"], e["name"], e["build_s"] * 1e3,
-        e["coherent_rays_per_s"] / 1e6, e["incoherent_rays_per_s"] / 1e6,
-        e["build_s"] / base["build_s"], e["coherent_rays_per_s"] / base["coherent_rays_per_s"],
-        e["incoherent_rays_per_s"] / base["incoherent_rays_per_s"],
-        e["leaks"], d["leak_rays"], e["leaks_far"], d["leak_rays"]))
+mesh = sys.argv[1]
+rows = [json.loads(l) for l in sys.argv[2].splitlines() if l.strip()]
+base = rows[0]
+for e in rows:
+    name = "catmark_car" if mesh == "car" else "grid %s (%d faces)" % (mesh, e["faces"])
+    bpt = "%.1f" % e["bytes_per_triangle"] if e["bytes_per_triangle"] is not None else "-"
+    print("| %s | %d | %d | %d | %s | %.1f | %.2f | %.2f | %.2f | %s | %.3f | %.2f | %.2f | %.2f | %d / %d | %d / %d |" % (
+        name, e["rate"], e["threads"], e["triangles"], e["engine"], e["build_ms"],
+        e["coherent_mrays_s"], e["incoherent_mrays_s"], e["anyhit_mrays_s"], bpt,
+        e["build_ms"] / base["build_ms"], e["coherent_mrays_s"] / base["coherent_mrays_s"],
+        e["incoherent_mrays_s"] / base["incoherent_mrays_s"],
+        e["anyhit_mrays_s"] / base["anyhit_mrays_s"],
+        e["leaks"], e["leak_rays"], e["leaks_far"], e["leak_rays"]))
 PY
-        done
-    }
+    done
 done

@@ -566,12 +566,82 @@ fn cli_crosscheck_and_bench() {
     let text = String::from_utf8(out.stdout).unwrap();
     for engine in [
         "limitray",
+        "limitray-triangles",
         "embree-triangles",
         "embree-subdiv",
         "limitray-exact",
     ] {
         assert!(text.contains(engine), "{text}");
     }
+    // `--json`: one object per engine per line, with the keys.
+    let out = std::process::Command::new(exe)
+        .args([
+            "bench",
+            cube.to_str().unwrap(),
+            "--rate",
+            "8",
+            "--rays",
+            "20000",
+            "--reps",
+            "1",
+            "--threads",
+            "2",
+            "--leak-rays",
+            "5000",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let names: Vec<&str> = rows.iter().map(|r| r["engine"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        [
+            "limitray",
+            "limitray-triangles",
+            "embree-triangles",
+            "embree-subdiv",
+            "embree-tri-robust",
+            "limitray-exact"
+        ]
+    );
+    for r in &rows {
+        for key in [
+            "build_ms",
+            "coherent_mrays_s",
+            "incoherent_mrays_s",
+            "anyhit_mrays_s",
+            "leaks",
+            "leaks_far",
+        ] {
+            assert!(r[key].as_f64().is_some_and(|x| x >= 0.0), "{key}: {r}");
+        }
+        assert!(r.get("bytes_per_triangle").is_some(), "{r}");
+    }
+    // The grid core: no leaks, and its bytes per triangle include every level. A closed
+    // cube at rate 8 is 768 triangles in 6 blocks of 8×8 quads, about 15.5 bytes each.
+    let grid = &rows[0];
+    assert_eq!(
+        (grid["leaks"].as_u64(), grid["leaks_far"].as_u64()),
+        (Some(0), Some(0))
+    );
+    let bpt = grid["bytes_per_triangle"].as_f64().unwrap();
+    assert!(bpt > 8.0 && bpt <= 20.0, "{grid}");
+    // Embree's memory is seen through its monitor.
+    assert!(
+        rows[3]["bytes_per_triangle"].as_f64().unwrap() > 0.0,
+        "{}",
+        rows[3]
+    );
     // Bad input: exit code 2 with a message naming the problem.
     let out = std::process::Command::new(exe)
         .args(["crosscheck", cube.to_str().unwrap(), "--rate", "0"])
