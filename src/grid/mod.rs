@@ -312,16 +312,16 @@ impl GridMesh {
             .into_iter()
             .map(|i| loose[i].take().expect("each loose triangle is one leaf"))
             .collect();
-        let renumber = |r: top::Ref| {
+        fn renumber(r: top::Ref, new_id: &[u32]) -> top::Ref {
             if r != top::EMPTY && r & top::LEAF != 0 {
                 top::LEAF | new_id[(r & !top::LEAF) as usize]
             } else {
                 r
             }
-        };
-        top.root = renumber(top.root);
+        }
+        top.root = renumber(top.root, &new_id);
         for n in &mut top.nodes {
-            n.child = n.child.map(renumber);
+            n.child = n.child.map(|r| renumber(r, &new_id));
         }
         // Window rows are read four values at a time: the last plane's last row reads past it.
         m.coords.extend_from_slice(&[0.0; 4]);
