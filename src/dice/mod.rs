@@ -511,8 +511,7 @@ impl DomainCtx<'_> {
             );
             let level = self
                 .table
-                .eval(FaceCoord::new(f as u32, k as u32, cu, cv))?
-                .level;
+                .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?;
             out.triangles.push(t.map(|i| map[i as usize]));
             out.tri_info.push(TriInfo {
                 face: f as u32,

@@ -72,6 +72,44 @@ impl PatchTable {
         }
     }
 
+    /// The subdivision level of the patch at `at`: [`Sample::level`] of [`Self::eval`], found
+    /// by the quadtree lookup alone where the leaf is a B-spline or single-crease patch (whose
+    /// level is its own), by evaluation elsewhere (end caps and Stam patches report how deep
+    /// their evaluation went).
+    pub fn level_at(&self, at: FaceCoord) -> Result<u8> {
+        let (face, k) = (at.face as usize, at.k as usize);
+        if face < self.num_faces()
+            && k < self.sub_faces(face)
+            && (0.0..=1.0).contains(&at.u)
+            && (0.0..=1.0).contains(&at.v)
+        {
+            let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
+            let (mut s, mut t) = (at.u, at.v);
+            loop {
+                match node {
+                    Node::Inner(c) => {
+                        let (q, s2, t2) = descend(s, t);
+                        s = s2;
+                        t = t2;
+                        node = self.kids[c as usize][q];
+                    }
+                    Node::Leaf(p) => {
+                        let patch = &self.patches[p as usize];
+                        if matches!(
+                            patch.kind,
+                            PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. }
+                        ) {
+                            return Ok(patch.level);
+                        }
+                        break;
+                    }
+                    Node::Empty => break,
+                }
+            }
+        }
+        Ok(self.eval(at)?.level)
+    }
+
     /// Evaluates many samples in parallel.
     pub fn eval_batch(&self, samples: &[FaceCoord]) -> Vec<Result<Sample>> {
         use rayon::prelude::*;
@@ -122,6 +160,34 @@ impl PatchTable {
                 let t1 = (d[0] * VAX[c][0] + d[1] * VAX[c][1]).clamp(0.0, 1.0);
                 let (pt, sub, depth) = basis.eval_local(cps, s1, t1);
                 (pt, Some(rot.then(&sub)), depth)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::coord::FaceCoord;
+    use crate::harness::rng::SplitMix64;
+    use crate::patch::{PatchOptions, PatchTable};
+
+    /// `level_at` is `eval(..).level`, on meshes with B-spline, single-crease, Stam and
+    /// end-cap leaves (extraordinary vertices, semi-sharp creases, n-gons).
+    #[test]
+    fn level_at_is_the_evaluated_level() {
+        let mut rng = SplitMix64(8);
+        for mesh in [
+            crate::mesh::shapes::rounded_box(2.0),
+            crate::mesh::shapes::gear(7),
+            crate::mesh::shapes::blob(),
+        ] {
+            let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+            for _ in 0..4000 {
+                let f = rng.below(table.num_faces());
+                let k = rng.below(table.sub_faces(f));
+                let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
+                let want = table.eval(at).map(|s| s.level).ok();
+                assert_eq!(table.level_at(at).ok(), want, "{at:?}");
             }
         }
     }
