@@ -10,7 +10,7 @@
 #
 # Usage: bash scripts/setup-embree.sh && bash scripts/bench-embree.sh > table.md 2> raw.jsonl
 # Environment: RAYS (default 1000000), REPS (3), THREADS ("1 2"),
-#              CONFIGS ("car:4 car:16 316:4 79:16": mesh (car or grid size) and rate).
+#              CONFIGS ("car:4 car:16 316:4 79:16": mesh (car, blob or grid size) and rate).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -31,6 +31,8 @@ for config in $CONFIGS; do
     for t in $THREADS; do
         if [[ $mesh == car ]]; then
             args=("$CAR")
+        elif [[ $mesh == blob ]]; then
+            args=("$ROOT/scenes/meshes/blob.obj")
         else
             args=(--grid "$mesh")
         fi
@@ -42,7 +44,7 @@ mesh = sys.argv[1]
 rows = [json.loads(l) for l in sys.argv[2].splitlines() if l.strip()]
 base = rows[0]
 for e in rows:
-    name = "catmark_car" if mesh == "car" else "grid %s (%d faces)" % (mesh, e["faces"])
+    name = {"car": "catmark_car", "blob": "blob.obj"}.get(mesh) or "grid %s (%d faces)" % (mesh, e["faces"])
     bpt = "%.1f" % e["bytes_per_triangle"] if e["bytes_per_triangle"] is not None else "-"
     print("| %s | %d | %d | %d | %s | %.1f | %.2f | %.2f | %.2f | %s | %.3f | %.2f | %.2f | %.2f | %d / %d | %d / %d |" % (
         name, e["rate"], e["threads"], e["triangles"], e["engine"], e["build_ms"],
