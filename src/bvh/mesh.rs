@@ -175,8 +175,6 @@ impl MeshBvh {
             boxes: &self.boxes,
             nodes: &self.cwbvh.nodes,
             tris: &self.tri_verts,
-            records: (&[], std::ptr::null(), 0, 0, 0),
-            extra: [(&[], std::ptr::null(), 0, 0); 2],
         };
         walk(&self.cwbvh, self.depth, pf, r, leaf);
     }
@@ -228,12 +226,47 @@ impl MeshBvh {
     /// The hit record of leaf triangle `li` at `t` with barycentrics `b1, b2`.
     pub fn hit(&self, li: usize, t: f32, b1: f32, b2: f32) -> Hit {
         let tri = self.tri_index[li];
-        let [a, b, c] = self.tri_verts[li];
         let info = &self.diced.tri_info[tri as usize];
         let idx = self.diced.triangles[tri as usize];
+        Corners {
+            p: self.tri_verts[li],
+            n: idx.map(|i| self.diced.normals[i as usize]),
+            uv: info.uv,
+        }
+        .hit(t, b1, b2, tri, info.face, info.k, info.level)
+    }
+}
+
+/// What a hit record interpolates: a triangle's corners, their unit normals and parameters.
+pub(crate) struct Corners {
+    /// Positions.
+    pub p: [[f32; 3]; 3],
+    /// Unit shading normals.
+    pub n: [[f32; 3]; 3],
+    /// `(u, v)` in the face's parameterisation.
+    pub uv: [[f32; 2]; 3],
+}
+
+impl Corners {
+    /// The hit at `t` with barycentrics `b1, b2`: parameters and shading normal interpolated,
+    /// geometric normal from the edges (the shading normal falls back to it where the
+    /// interpolated normals cancel).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn hit(
+        &self,
+        t: f32,
+        b1: f32,
+        b2: f32,
+        triangle: u32,
+        face: u32,
+        k: u32,
+        level: u8,
+    ) -> Hit {
+        let (uv, n) = (&self.uv, &self.n);
+        let [a, b, c] = self.p;
         let b0 = 1.0 - b1 - b2;
-        let u = b0 * info.uv[0][0] + b1 * info.uv[1][0] + b2 * info.uv[2][0];
-        let v = b0 * info.uv[0][1] + b1 * info.uv[1][1] + b2 * info.uv[2][1];
+        let u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
+        let v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
         let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
         let ng = normalize([
@@ -241,15 +274,14 @@ impl MeshBvh {
             e1[2] * e2[0] - e1[0] * e2[2],
             e1[0] * e2[1] - e1[1] * e2[0],
         ]);
-        let n = idx.map(|i| self.diced.normals[i as usize]);
         let ns = normalize(std::array::from_fn(|i| {
             b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]
         }));
         Hit {
             t,
-            triangle: tri,
-            face: info.face,
-            k: info.k,
+            triangle,
+            face,
+            k,
             u,
             v,
             b1,
@@ -260,7 +292,7 @@ impl MeshBvh {
             } else {
                 ng
             },
-            level: info.level,
+            level,
         }
     }
 }
@@ -342,12 +374,6 @@ pub struct Prefetch<'a> {
     pub nodes: &'a [CwBvhNode],
     /// Leaf-ordered triangles (empty for the top level).
     pub tris: &'a [[[f32; 3]; 3]],
-    /// Other leaf records: leaf position → record index, and the records' first cache lines
-    /// (`(base, stride, count, lines)`; count 0: none).
-    pub records: (&'a [u32], *const u8, usize, usize, usize),
-    /// Two more parts of each record elsewhere: per record, its offset in `stride`s from
-    /// `base` (`u32::MAX`: none), and the lines to fetch (`(offsets, base, stride, lines)`).
-    pub extra: [(&'a [u32], *const u8, usize, usize); 2],
 }
 
 impl<'a> Prefetch<'a> {
@@ -357,8 +383,6 @@ impl<'a> Prefetch<'a> {
             boxes,
             nodes,
             tris: &[],
-            records: (&[], std::ptr::null(), 0, 0, 0),
-            extra: [(&[], std::ptr::null(), 0, 0); 2],
         }
     }
 }
@@ -433,25 +457,6 @@ unsafe fn wide_hitmask_sse(
                     let p = t.as_ptr() as *const i8;
                     _mm_prefetch::<_MM_HINT_T0>(p);
                     _mm_prefetch::<_MM_HINT_T0>(p.add(64));
-                }
-                let (index, base, stride, count, lines) = pf.records;
-                if let Some(&i) = index.get(start as usize) {
-                    if (i as usize) < count {
-                        let p = base.add(i as usize * stride) as *const i8;
-                        for l in 0..lines {
-                            _mm_prefetch::<_MM_HINT_T0>(p.add(64 * l));
-                        }
-                        for (offsets, base2, stride2, lines2) in pf.extra {
-                            if let Some(&o) = offsets.get(i as usize) {
-                                if o != u32::MAX {
-                                    let p = base2.add(o as usize * stride2) as *const i8;
-                                    for l in 0..lines2 {
-                                        _mm_prefetch::<_MM_HINT_T0>(p.add(64 * l));
-                                    }
-                                }
-                            }
-                        }
-                    }
                 }
             } else {
                 let i = node.child_node_index(c) as usize;

@@ -19,14 +19,12 @@ pub mod node;
 pub mod top;
 pub mod window;
 
-use crate::bvh::mesh::normalize;
+use crate::bvh::mesh::Corners;
 use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion};
 use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK};
-use glam::Vec3A;
 use node::{front_to_back, test4, Box4};
-use obvhs::{aabb::Aabb, Boundable};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
@@ -96,14 +94,6 @@ struct Best {
     t: f32,
     b1: f32,
     b2: f32,
-}
-
-struct PrimBox([[f32; 3]; 2]);
-
-impl Boundable for PrimBox {
-    fn aabb(&self) -> Aabb {
-        Aabb::new(Vec3A::from(self.0[0]), Vec3A::from(self.0[1]))
-    }
 }
 
 /// One block's data before it is placed.
@@ -226,7 +216,7 @@ impl GridMesh {
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
             ..GridMesh::default()
         };
-        let mut prim_boxes: Vec<PrimBox> = data.iter().map(|b| PrimBox(b.bounds)).collect();
+        let mut prim_boxes: Vec<[[f32; 3]; 2]> = data.iter().map(|b| b.bounds).collect();
         let mut loose = Vec::new();
         for (i, t) in d.triangles.iter().enumerate() {
             if covered[i] {
@@ -241,7 +231,7 @@ impl GridMesh {
                     b[1][a] = b[1][a].max(q[a]);
                 }
             }
-            prim_boxes.push(PrimBox(b));
+            prim_boxes.push(b);
             loose.push(Loose {
                 p,
                 n: t.map(|v| oct_encode(d.normals[v as usize])),
@@ -254,15 +244,15 @@ impl GridMesh {
         }
         for b in &prim_boxes {
             for a in 0..3 {
-                m.bounds[0][a] = m.bounds[0][a].min(b.0[0][a]);
-                m.bounds[1][a] = m.bounds[1][a].max(b.0[1][a]);
+                m.bounds[0][a] = m.bounds[0][a].min(b[0][a]);
+                m.bounds[1][a] = m.bounds[1][a].max(b[1][a]);
             }
         }
         if prim_boxes.is_empty() {
             m.coords.extend_from_slice(&[0.0; 4]);
             return m;
         }
-        let bounds: Vec<[[f32; 3]; 2]> = prim_boxes.iter().map(|b| b.0).collect();
+        let bounds = prim_boxes;
         let mut top = Top::build(&bounds);
         // Place blocks and loose triangles in the order a depth-first walk meets them.
         let mut order = Vec::with_capacity(bounds.len());
@@ -564,38 +554,7 @@ impl GridMesh {
                 (l.p, l.n.map(oct_decode), l.uv, l.face, l.k, l.level)
             }
         };
-        let (t, b1, b2) = (best.t, best.b1, best.b2);
-        let b0 = 1.0 - b1 - b2;
-        let u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
-        let v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
-        let [a, bb, c] = p;
-        let e1 = [bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]];
-        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let ng = normalize([
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ]);
-        let ns = normalize(std::array::from_fn(|i| {
-            b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]
-        }));
-        Hit {
-            t,
-            triangle: best.id,
-            face,
-            k,
-            u,
-            v,
-            b1,
-            b2,
-            ng,
-            ns: if ns.iter().all(|x| x.is_finite()) {
-                ns
-            } else {
-                ng
-            },
-            level,
-        }
+        Corners { p, n, uv }.hit(best.t, best.b1, best.b2, best.id, face, k, level)
     }
 }
 
