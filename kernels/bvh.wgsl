@@ -1,5 +1,5 @@
-// Ray queries on the GPU: the same obvhs CWBVH, the same conservative box test and the same
-// watertight triangle test as the CPU (src/bvh/{mesh,scene,triangle}.rs), operation for
+// Ray queries on the GPU: the same grid meshes and scene CWBVH, the same conservative box tests
+// and the same watertight triangle test as the CPU (src/grid, src/bvh/{scene,triangle}.rs), operation for
 // operation in the same order and without fused multiply-add, so that on an IEEE device whose
 // + − × ÷ round like Rust's f32 (lavapipe does) every hit is bitwise the CPU's.
 //
@@ -9,7 +9,7 @@
 //
 // Geometry lives in one space of u32 words split over GEO_CHUNKS storage bindings of
 // 2^chunk_shift words each (a large scene exceeds one binding): word i is word
-// i & (2^shift − 1) of chunk i >> shift. The records of the space (mesh records, obvhs's
+// i & (2^shift − 1) of chunk i >> shift. The records of the space (grid mesh records, obvhs's
 // CwBvhNode as it is, exact child boxes, leaf-ordered triangles, the top level, instances) are
 // described once, in src/gpu/layout.rs; their offsets are in `Params`.
 
@@ -185,7 +185,8 @@ fn intersect_triangle(r: PRay, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, tmax: f
 }
 
 // ---------------------------------------------------------------------------------------------
-// CWBVH nodes (obvhs's CwBvhNode, NODE_WORDS words) and the node test (node_hitmask).
+// The instances' CWBVH nodes (obvhs's CwBvhNode, NODE_WORDS words) and the node test
+// (node_hitmask).
 
 fn byte_of(lo: u32, hi: u32, c: u32) -> u32 {
     let w = select(lo, hi, c >= 4u);
@@ -327,46 +328,268 @@ struct MeshHit {
     b2: f32,
 }
 
-// Closest hit in mesh record `m` (MeshBvh::intersect): lowest leaf index on equal t.
-// With `anyhit`, the first hit found ends the traversal (MeshBvh::occluded).
-fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
-    var best = MeshHit(false, 0u, 0.0, 0.0, 0.0);
-    let rec = P.mesh_off + MESH_WORDS * m;
-    let node_off = gw(rec + MESH_NODE_OFF);
-    let node_count = gw(rec + MESH_NODE_COUNT);
-    let vert_off = gw(rec + MESH_VERT_OFF);
-    let box_off = gw(rec + MESH_BOX_OFF);
-    if (node_count == 0u || !r.ok) {
-        return best;
+// ---------------------------------------------------------------------------------------------
+// Grid meshes (src/grid): four boxes at once (node::test4_scalar), the front-to-back order
+// (node::front_to_back), the top level's walk (top::Top::walk), a block's implicit hierarchy
+// (GridMesh::walk_block) and the window test (window::window_scalar), each in the CPU's order.
+
+struct Box4Hit {
+    mask: u32,
+    near: vec4<f32>,
+}
+
+// The four boxes of the Box4 at word `bx` (lo[axis][child], then hi) met within `tmax`, and
+// their entry distances.
+fn test4(bx: u32, r: PRay, tmax: f32) -> Box4Hit {
+    var out: Box4Hit;
+    out.mask = 0u;
+    for (var c = 0u; c < 4u; c++) {
+        var near = r.tmin;
+        var far = tmax;
+        for (var a = 0u; a < 3u; a++) {
+            var lo = gf(bx + 4u * a + c);
+            var hi = gf(bx + BOX4_HI + 4u * a + c);
+            if (sign_negative(r.inv[a])) {
+                let t = lo;
+                lo = hi;
+                hi = t;
+            }
+            let tn = (lo - r.o[a]) * r.inv[a];
+            let tf = ((hi - r.o[a]) * r.inv[a]) * P.box_scale;
+            if (tn > near) {
+                near = tn;
+            }
+            if (tf < far) {
+                far = tf;
+            }
+        }
+        if (near <= far) {
+            out.mask |= 1u << c;
+        }
+        out.near[c] = near;
     }
-    var tmax = r.tmax;
-    var w = walk_new();
-    loop {
+    return out;
+}
+
+struct Order4 {
+    c: array<u32, 4>,
+    n: u32,
+}
+
+// The children in `mask`, nearest first, ties by child index (insertion in index order).
+fn front_to_back(mask: u32, near: vec4<f32>) -> Order4 {
+    var o: Order4;
+    o.n = 0u;
+    for (var c = 0u; c < 4u; c++) {
+        if ((mask & (1u << c)) == 0u) {
+            continue;
+        }
+        var i = o.n;
+        while (i > 0u && near[c] < near[o.c[i - 1u]]) {
+            o.c[i] = o.c[i - 1u];
+            i -= 1u;
+        }
+        o.c[i] = c;
+        o.n += 1u;
+    }
+    return o;
+}
+
+// The running answer of a mesh query: the best hit so far (lowest diced-mesh id on equal t).
+struct GridBest {
+    hit: bool,
+    leaf: u32,
+    id: u32,
+    t: f32,
+    b1: f32,
+    b2: f32,
+    tmax: f32,
+    stop: bool,
+}
+
+// Vertex (x, y) of the block whose coordinates start at `vert`, `w` vertices per row.
+fn block_vertex(vert: u32, w: u32, x: u32, y: u32) -> vec3<f32> {
+    let i = vert + 3u * y * w + x;
+    return vec3<f32>(gf(i), gf(i + w), gf(i + 2u * w));
+}
+
+// Window (wx, wy) of block record `blk` (block index `bi`): the eight triangles of its 2×2
+// quads in lane order (quad row, quad column, half), the closest within tmax (lowest lane on
+// equal t), then merged into `b` as GridMesh::intersect does.
+fn grid_window(b: ptr<function, GridBest>, blk: u32, bi: u32, wx: u32, wy: u32, r: PRay,
+               anyhit: bool) {
+    let dims = gw(blk + BLK_DIMS);
+    let cols = dims & 0xffu;
+    let rows = (dims >> 8u) & 0xffu;
+    let vert = gw(blk + BLK_VERT);
+    let w = cols + 1u;
+    let qx = min(cols - 2u * wx, 2u);
+    let qy = min(rows - 2u * wy, 2u);
+    var found = false;
+    var lane = 0u;
+    var bt = 0.0;
+    var bb1 = 0.0;
+    var bb2 = 0.0;
+    for (var l = 0u; l < 8u; l++) {
+        let ly = l / 4u;
+        let lx = (l / 2u) % 2u;
+        let h = l % 2u;
+        if (lx >= qx || ly >= qy) {
+            continue;
+        }
+        let x = 2u * wx + lx;
+        let y = 2u * wy + ly;
+        let pa = block_vertex(vert, w, x, y);
+        let pc = block_vertex(vert, w, x + 1u, y + 1u);
+        var pb: vec3<f32>;
+        var pd: vec3<f32>;
+        if (h == 0u) {
+            pb = block_vertex(vert, w, x + 1u, y);
+            pd = pc;
+        } else {
+            pb = pc;
+            pd = block_vertex(vert, w, x, y + 1u);
+        }
+        var limit = (*b).tmax;
+        if (found) {
+            limit = bt;
+        }
+        let th = intersect_triangle(r, pa, pb, pd, limit);
+        if (th.hit && (!found || th.t < bt)) {
+            found = true;
+            lane = l;
+            bt = th.t;
+            bb1 = th.b1;
+            bb2 = th.b2;
+        }
+    }
+    if (!found) {
+        return;
+    }
+    if (anyhit) {
+        (*b).hit = true;
+        (*b).stop = true;
+        return;
+    }
+    let x = 2u * wx + (lane / 2u) % 2u;
+    let y = 2u * wy + lane / 4u;
+    let h = lane % 2u;
+    let id = gw(blk + BLK_TRI0) + y * gw(blk + BLK_TRI_STRIDE) + 2u * x + h;
+    if (!(*b).hit || bt < (*b).t || (bt == (*b).t && id < (*b).id)) {
+        (*b).hit = true;
+        (*b).leaf = (bi << 7u) | (y << 4u) | (x << 1u) | h;
+        (*b).id = id;
+        (*b).t = bt;
+        (*b).b1 = bb1;
+        (*b).b2 = bb2;
+        (*b).tmax = bt;
+    }
+}
+
+// Block `bi` of mesh record `rec`: its root, then (blocks of more than 4×4 quads) the
+// quadrants, front to back, the windows met within the running tmax.
+fn grid_block(b: ptr<function, GridBest>, rec: u32, bi: u32, r: PRay, anyhit: bool) {
+    let blk = gw(rec + MESH_BLOCK_OFF) + BLK_WORDS * bi;
+    let dims = gw(blk + BLK_DIMS);
+    let two_level = (dims & 0xffu) > GRID_BLOCK / 2u || ((dims >> 8u) & 0xffu) > GRID_BLOCK / 2u;
+    var top = test4(blk + BLK_ROOT, r, (*b).tmax);
+    var order = front_to_back(top.mask, top.near);
+    for (var i = 0u; i < order.n; i++) {
+        let c = order.c[i];
+        if (top.near[c] > (*b).tmax) {
+            continue;
+        }
+        if (!two_level) {
+            grid_window(b, blk, bi, c % 2u, c / 2u, r, anyhit);
+            if ((*b).stop) {
+                return;
+            }
+            continue;
+        }
+        var q = test4(gw(blk + BLK_BOXES) + BOX4_WORDS * c, r, (*b).tmax);
+        var order2 = front_to_back(q.mask, q.near);
+        for (var j = 0u; j < order2.n; j++) {
+            let c2 = order2.c[j];
+            if (q.near[c2] > (*b).tmax) {
+                continue;
+            }
+            grid_window(b, blk, bi, 2u * (c % 2u) + c2 % 2u, 2u * (c / 2u) + c2 / 2u, r, anyhit);
+            if ((*b).stop) {
+                return;
+            }
+        }
+    }
+}
+
+// Closest hit in grid mesh record `m` (GridMesh::intersect): lowest diced-mesh id on equal t.
+// With `anyhit`, the first hit found ends the walk (GridMesh::occluded).
+fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
+    let rec = P.mesh_off + MESH_WORDS * m;
+    let root = gw(rec + MESH_ROOT);
+    if (root == TOP_EMPTY || !r.ok) {
+        return MeshHit(false, 0u, 0.0, 0.0, 0.0);
+    }
+    let top_off = gw(rec + MESH_TOP_OFF);
+    let nblocks = gw(rec + MESH_NBLOCKS);
+    var b = GridBest(false, 0u, 0u, 0.0, 0.0, 0.0, r.tmax, false);
+    var stack: array<vec2<u32>, GRID_STACK>;
+    stack[0] = vec2<u32>(root, bitcast<u32>(r.tmin));
+    var sp = 1u;
+    while (sp > 0u) {
         if (!walk_iter()) {
             break;
         }
-        while (w.prim.y != 0u) {
-            let l = firstLeadingBit(w.prim.y);
-            w.prim.y &= ~(1u << l);
-            let li = w.prim.x + l;
-            let v = vert_off + TRI_WORDS * li;
-            let a = vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u));
-            let b = vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u));
-            let c = vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u));
-            let h = intersect_triangle(r, a, b, c, tmax);
-            if (h.hit && (!best.hit || h.t < best.t || (h.t == best.t && li < best.leaf))) {
-                best = MeshHit(true, li, h.t, h.b1, h.b2);
-                if (anyhit) {
-                    return best;
-                }
-                tmax = h.t;
-            }
+        sp -= 1u;
+        let e = stack[sp];
+        if (bitcast<f32>(e.y) > b.tmax) {
+            continue;
         }
-        if (!walk_step(&w, node_off, box_off, r, tmax)) {
+        if ((e.x & TOP_LEAF) != 0u) {
+            let prim = e.x & ~TOP_LEAF;
+            if (prim < nblocks) {
+                grid_block(&b, rec, prim, r, anyhit);
+            } else {
+                let li = prim - nblocks;
+                let v = gw(rec + MESH_LOOSE_OFF) + LOOSE_WORDS * li;
+                let th = intersect_triangle(r, vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u)),
+                    vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u)),
+                    vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u)), b.tmax);
+                if (th.hit) {
+                    let id = gw(v + LOOSE_ID);
+                    if (anyhit) {
+                        b.hit = true;
+                        b.stop = true;
+                    } else if (!b.hit || th.t < b.t || (th.t == b.t && id < b.id)) {
+                        b = GridBest(true, LEAF_LOOSE | li, id, th.t, th.b1, th.b2, th.t, false);
+                    }
+                }
+            }
+            if (b.stop) {
+                break;
+            }
+            continue;
+        }
+        let node = top_off + TOP_WORDS * e.x;
+        var h = test4(node, r, b.tmax);
+        if (h.mask == 0u) {
+            continue;
+        }
+        var order = front_to_back(h.mask, h.near);
+        // Far to near: the nearest is popped first.
+        for (var k = order.n; k > 0u; k--) {
+            let c = order.c[k - 1u];
+            if (sp == GRID_STACK) {
+                overflow = true;
+                break;
+            }
+            stack[sp] = vec2<u32>(gw(node + TOP_CHILD + c), bitcast<u32>(h.near[c]));
+            sp += 1u;
+        }
+        if (overflow) {
             break;
         }
     }
-    return best;
+    return MeshHit(b.hit, b.leaf, b.t, b.b1, b.b2);
 }
 
 struct SceneResult {
@@ -393,7 +616,7 @@ fn inst_vec(base: u32, v: vec3<f32>, point: bool) -> vec3<f32> {
     return res;
 }
 
-// Closest hit of a world ray (SceneBvh::intersect, or MeshBvh::intersect in mode 0); with
+// Closest hit of a world ray (SceneBvh::intersect, or GridMesh::intersect in mode 0); with
 // `any`, the first hit found (SceneBvh::occluded).
 fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32, anyhit: bool) -> SceneResult {
     var best = SceneResult(false, 0u, 0u, 0.0, 0.0, 0.0);
@@ -436,4 +659,42 @@ fn intersect_world(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax0: f32, anyhit: bo
         }
     }
     return best;
+}
+
+// The corners of the triangle at hit location `leaf` (Hit::leaf) of mesh record `rec`, and
+// where their unit normals are in the render block (`normals`: the mesh's MX_NORMALS, `loose`:
+// its MX_LOOSE_NORMALS), in the order of the hit's barycentrics (GridMesh::corners).
+struct LeafCorners {
+    p: array<vec3<f32>, 3>,
+    n: array<u32, 3>,
+}
+
+fn leaf_corners(rec: u32, leaf: u32, normals: u32, loose: u32) -> LeafCorners {
+    var out: LeafCorners;
+    if ((leaf & LEAF_LOOSE) != 0u) {
+        let li = leaf & ~LEAF_LOOSE;
+        let v = gw(rec + MESH_LOOSE_OFF) + LOOSE_WORDS * li;
+        for (var i = 0u; i < 3u; i++) {
+            out.p[i] = vec3<f32>(gf(v + 3u * i), gf(v + 3u * i + 1u), gf(v + 3u * i + 2u));
+            out.n[i] = loose + TRI_WORDS * li + 3u * i;
+        }
+        return out;
+    }
+    let blk = gw(rec + MESH_BLOCK_OFF) + BLK_WORDS * (leaf >> 7u);
+    let y = (leaf >> 4u) & 7u;
+    let x = (leaf >> 1u) & 7u;
+    let w = (gw(blk + BLK_DIMS) & 0xffu) + 1u;
+    var cx = array<u32, 3>(x, x + 1u, x + 1u);
+    var cy = array<u32, 3>(y, y, y + 1u);
+    if ((leaf & 1u) == 1u) {
+        cx = array<u32, 3>(x, x + 1u, x);
+        cy = array<u32, 3>(y, y + 1u, y + 1u);
+    }
+    let vert = gw(blk + BLK_VERT);
+    let n0 = gw(blk + BLK_NORMAL);
+    for (var i = 0u; i < 3u; i++) {
+        out.p[i] = block_vertex(vert, w, cx[i], cy[i]);
+        out.n[i] = normals + 3u * (n0 + cy[i] * w + cx[i]);
+    }
+    return out;
 }

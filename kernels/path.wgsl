@@ -223,10 +223,11 @@ fn surface(h: SceneResult) -> SurfaceHit {
     let ib = P.inst_off + INSTANCE_WORDS * h.inst;
     let m = gw(ib + INST_MESH);
     let rec = P.mesh_off + MESH_WORDS * m;
-    let v = gw(rec + MESH_VERT_OFF) + TRI_WORDS * h.leaf;
-    let a = v3(v);
-    let b = v3(v + 3u);
-    let c = v3(v + 6u);
+    let extra = hdr(H_MESH_EXTRA) + MESH_EXTRA_WORDS * m;
+    let lc = leaf_corners(rec, h.leaf, gw(extra + MX_NORMALS), gw(extra + MX_LOOSE_NORMALS));
+    let a = lc.p[0];
+    let b = lc.p[1];
+    let c = lc.p[2];
     let b0 = 1.0 - h.b1 - h.b2;
     let e1 = b - a;
     let e2 = c - a;
@@ -235,10 +236,9 @@ fn surface(h: SceneResult) -> SurfaceHit {
         e1.z * e2.x - e1.x * e2.z,
         e1.x * e2.y - e1.y * e2.x,
     ));
-    let nb = gw(hdr(H_MESH_EXTRA) + MESH_EXTRA_WORDS * m + MX_NORMALS) + TRI_WORDS * h.leaf;
-    let n0 = v3(nb);
-    let n1 = v3(nb + 3u);
-    let n2 = v3(nb + 6u);
+    let n0 = v3(lc.n[0]);
+    let n1 = v3(lc.n[1]);
+    let n2 = v3(lc.n[2]);
     var ns = normalize_div((b0 * n0 + h.b1 * n1) + h.b2 * n2);
     if (!finite3(ns)) {
         ns = ng;

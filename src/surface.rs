@@ -188,7 +188,7 @@ impl Surface {
     /// queries.
     pub fn bvh(&self, options: &DiceOptions) -> Result<TracedSurface> {
         Ok(TracedSurface {
-            bvh: GridMesh::build(&self.dice(options)?),
+            bvh: GridMesh::build(&self.dice(options)?)?,
         })
     }
 }

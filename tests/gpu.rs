@@ -3,7 +3,7 @@
 //!   cancelling, double-rounding, subnormal-result and overflowing cases;
 //! - closest hits (camera, random, vertex/edge-aimed, inside-out and bounded rays on several
 //!   meshes, and instanced scenes with ties) have the same triangle and bitwise the same `t`
-//!   (and the same barycentrics) as `MeshBvh::intersect` / `SceneBvh::intersect`: 100% of rays;
+//!   (and the same barycentrics) as `GridMesh::intersect` / `SceneBvh::intersect`: 100% of rays;
 //! - geometry split over several storage bindings (an artificially small chunk) gives the same
 //!   answers;
 //! - traversal overflow and bad adapter names are reported as errors.
@@ -14,12 +14,14 @@
 mod common;
 
 use glam::{Affine3A, Quat, Vec3};
-use limitray::bvh::{MeshBvh, Ray, SceneBvh};
+use limitray::bvh::{Ray, SceneBvh};
+use limitray::dice::DicedMesh;
 use limitray::dice::{dice, DiceOptions, DiceRate};
 use limitray::gpu::exact::{edge_exact_gpu, edge_reference};
 use limitray::gpu::{
     context_for_tests, trace_mesh, trace_scene, GpuContext, GpuTracer, PackedScene, TraceOptions,
 };
+use limitray::grid::GridMesh;
 use limitray::harness::rng::SplitMix64;
 use limitray::mesh::ControlMesh;
 use limitray::patch::{PatchOptions, PatchTable};
@@ -29,18 +31,31 @@ fn ctx() -> Option<GpuContext> {
     context_for_tests().expect("a Vulkan adapter is required under CI=true")
 }
 
-fn build(mesh: &ControlMesh, rate: u32) -> MeshBvh {
+/// A grid mesh and the diced mesh it was built from (aimed rays use its vertices).
+struct Built {
+    grid: GridMesh,
+    diced: DicedMesh,
+}
+
+fn build_with(mesh: &ControlMesh, rate: DiceRate) -> Built {
     let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
     let d = dice(
         &table,
         mesh,
         &DiceOptions {
-            rate: DiceRate::Uniform(rate),
+            rate,
             max_rate: 256,
         },
     )
     .unwrap();
-    MeshBvh::build(d)
+    Built {
+        grid: GridMesh::build(&d).unwrap(),
+        diced: d,
+    }
+}
+
+fn build(mesh: &ControlMesh, rate: u32) -> Built {
+    build_with(mesh, DiceRate::Uniform(rate))
 }
 
 fn meshes() -> Vec<(String, ControlMesh, u32)> {
@@ -75,8 +90,8 @@ fn meshes() -> Vec<(String, ControlMesh, u32)> {
 
 /// Camera, random, aimed (at diced vertices and edge midpoints, from outside and inside),
 /// inside-out random, and bounded-interval rays.
-fn ray_set(bvh: &MeshBvh, n: usize, seed: u64) -> Vec<Ray> {
-    let b = bvh.bounds();
+fn ray_set(built: &Built, n: usize, seed: u64) -> Vec<Ray> {
+    let b = built.grid.bounds();
     let mut rays = limitray::harness::rays::camera_rays(b, n);
     rays.extend(limitray::harness::rays::random_rays(b, n, seed));
     let outside = [
@@ -84,9 +99,17 @@ fn ray_set(bvh: &MeshBvh, n: usize, seed: u64) -> Vec<Ray> {
         b[1][1] + 0.3,
         b[1][2] + 1.1 * (b[1][2] - b[0][2]) + 0.2,
     ];
-    rays.extend(limitray::harness::probe::aimed_rays(&bvh.diced, outside, n));
+    rays.extend(limitray::harness::probe::aimed_rays(
+        &built.diced,
+        outside,
+        n,
+    ));
     let centre: [f32; 3] = std::array::from_fn(|i| 0.5 * (b[0][i] + b[1][i]));
-    rays.extend(limitray::harness::probe::aimed_rays(&bvh.diced, centre, n));
+    rays.extend(limitray::harness::probe::aimed_rays(
+        &built.diced,
+        centre,
+        n,
+    ));
     for (i, d) in limitray::harness::probe::sphere_dirs(n / 2, seed + 1)
         .into_iter()
         .enumerate()
@@ -102,7 +125,7 @@ fn ray_set(bvh: &MeshBvh, n: usize, seed: u64) -> Vec<Ray> {
 }
 
 fn assert_same_mesh_hits(
-    bvh: &MeshBvh,
+    bvh: &GridMesh,
     rays: &[Ray],
     gpu: &[Option<limitray::bvh::Hit>],
     what: &str,
@@ -117,6 +140,7 @@ fn assert_same_mesh_hits(
             (None, None) => true,
             (Some(c), Some(g)) => {
                 c.triangle == g.triangle
+                    && c.leaf == g.leaf
                     && c.t.to_bits() == g.t.to_bits()
                     && c.b1.to_bits() == g.b1.to_bits()
                     && c.b2.to_bits() == g.b2.to_bits()
@@ -223,24 +247,51 @@ fn exact_edge_function_matches_cpu_f64() {
 #[test]
 fn mesh_hits_are_bitwise_the_cpu_hits() {
     let Some(ctx) = ctx() else { return };
-    for (name, mesh, rate) in meshes() {
-        let bvh = build(&mesh, rate);
-        let rays = ray_set(&bvh, 3000, 5);
-        let gpu = trace_mesh(&ctx, &bvh, &rays, TraceOptions::default()).unwrap();
-        assert_same_mesh_hits(&bvh, &rays, &gpu, &name);
+    let mut loose = 0;
+    let mut cases: Vec<(String, ControlMesh, DiceRate)> = meshes()
+        .into_iter()
+        .map(|(n, m, r)| (n, m, DiceRate::Uniform(r)))
+        .collect();
+    // Blocks of 6×6 quads (quadrants of 2×2 windows, some partial) and length-based rates
+    // (zipper strips: loose triangles).
+    let cube = common::cube_builder().build().unwrap();
+    cases.push(("cube 6".into(), cube.clone(), DiceRate::Uniform(6)));
+    let creased = limitray::mesh::obj::read_obj(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/creased_cube.obj"
+    )))
+    .unwrap();
+    cases.push((
+        "creased cube, lengths".into(),
+        creased,
+        DiceRate::EdgeLength(0.09),
+    ));
+    for (name, mesh, rate) in cases {
+        let built = build_with(&mesh, rate);
+        let rays = ray_set(&built, 3000, 5);
+        let gpu = trace_mesh(&ctx, &built.grid, &rays, TraceOptions::default()).unwrap();
+        assert_same_mesh_hits(&built.grid, &rays, &gpu, &name);
+        loose += built.grid.loose.len();
         eprintln!(
-            "{name}: {} rays, {} triangles: all equal",
+            "{name}: {} rays, {} triangles ({} blocks, {} loose): all equal",
             rays.len(),
-            bvh.tri_index.len()
+            built.grid.triangles,
+            built.grid.blocks.len(),
+            built.grid.loose.len()
         );
     }
+    assert!(
+        loose > 100,
+        "only {loose} loose triangles: the zipper path is not exercised"
+    );
 }
 
 #[test]
 fn small_tiles_and_split_geometry_give_the_same_hits() {
     let Some(ctx) = ctx() else { return };
-    let bvh = build(&common::cube_builder().build().unwrap(), 6);
-    let packed = PackedScene::from_mesh(&bvh).unwrap();
+    let built = build(&common::cube_builder().build().unwrap(), 6);
+    let bvh = &built.grid;
+    let packed = PackedScene::from_mesh(bvh).unwrap();
     let words = packed.words.len() as u64;
     // Chunks of the power of two above words/8: 5 to 8 bindings.
     let opts = TraceOptions {
@@ -250,13 +301,13 @@ fn small_tiles_and_split_geometry_give_the_same_hits() {
     };
     let tracer = GpuTracer::new(&ctx, packed, opts).unwrap();
     assert!(tracer.used_chunks() >= 5, "{} chunks", tracer.used_chunks());
-    let rays = ray_set(&bvh, 2000, 9);
-    let gpu = trace_mesh(&ctx, &bvh, &rays, opts).unwrap();
-    assert_same_mesh_hits(&bvh, &rays, &gpu, "split cube");
+    let rays = ray_set(&built, 2000, 9);
+    let gpu = trace_mesh(&ctx, bvh, &rays, opts).unwrap();
+    assert_same_mesh_hits(bvh, &rays, &gpu, "split cube");
     // Too small a chunk for 8 bindings is a clear error, not a panic.
     let e = GpuTracer::new(
         &ctx,
-        PackedScene::from_mesh(&bvh).unwrap(),
+        PackedScene::from_mesh(bvh).unwrap(),
         TraceOptions {
             max_chunk_words: Some(words / 20),
             ..Default::default()
@@ -268,12 +319,15 @@ fn small_tiles_and_split_geometry_give_the_same_hits() {
 }
 
 fn scene() -> (SceneBvh, Vec<Ray>) {
-    let a = Arc::new(build(&common::cube_builder().build().unwrap(), 4));
+    let a = Arc::new(build(&common::cube_builder().build().unwrap(), 4).grid);
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let b = Arc::new(build(
-        &limitray::mesh::obj::read_obj(&root.join("scenes/creased_cube.obj")).unwrap(),
-        6,
-    ));
+    let b = Arc::new(
+        build(
+            &limitray::mesh::obj::read_obj(&root.join("scenes/creased_cube.obj")).unwrap(),
+            6,
+        )
+        .grid,
+    );
     let mut s = SceneBvh::new();
     let ma = s.add_mesh(a);
     let mb = s.add_mesh(b);
@@ -352,7 +406,7 @@ fn scene_hits_are_bitwise_the_cpu_hits() {
 #[test]
 fn overflow_and_bad_adapter_are_errors() {
     let Some(ctx) = ctx() else { return };
-    let bvh = build(&common::cube_builder().build().unwrap(), 4);
+    let bvh = build(&common::cube_builder().build().unwrap(), 4).grid;
     let rays = limitray::harness::rays::camera_rays(bvh.bounds(), 64);
     let e = trace_mesh(
         &ctx,
@@ -375,9 +429,9 @@ fn cli_trace_gpu_prints_what_the_cpu_prints() {
     let Some(_ctx) = ctx() else { return };
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mesh = root.join("scenes/creased_cube.obj");
-    let bvh = build(&limitray::mesh::obj::read_obj(&mesh).unwrap(), 4);
+    let built = build(&limitray::mesh::obj::read_obj(&mesh).unwrap(), 4);
     let mut input = String::new();
-    for r in ray_set(&bvh, 300, 2) {
+    for r in ray_set(&built, 300, 2) {
         let [ox, oy, oz] = r.origin;
         let [dx, dy, dz] = r.dir;
         if r.tmin == 0.0 && r.tmax == f32::INFINITY {
@@ -472,7 +526,7 @@ fn gpu_does_not_leak() {
                 rays.extend(limitray::harness::probe::aimed_rays(&bvh.diced, o, 2000));
             }
             assert!(rays.len() > 5000);
-            let hits = trace_mesh(&ctx, &bvh, &rays, TraceOptions::default()).unwrap();
+            let hits = trace_mesh(&ctx, &bvh.grid, &rays, TraceOptions::default()).unwrap();
             let missed = hits.iter().filter(|h| h.is_none()).count();
             assert_eq!(
                 missed,

@@ -35,7 +35,7 @@ struct Counts {
 
 /// Compares the two structures on `rays`.
 fn compare(name: &str, d: &DicedMesh, rays: &[Ray]) -> Counts {
-    let grid = GridMesh::build(d);
+    let grid = GridMesh::build(d).unwrap();
     let bvh = MeshBvh::build(d.clone());
     assert_eq!(grid.triangles, d.triangles.len());
     let mut c = Counts::default();
@@ -159,7 +159,7 @@ fn corpus_shapes_trace_as_the_triangle_bvh() {
             total.other_triangle += c.other_triangle;
             total.other_t += c.other_t;
             total.worst_t = total.worst_t.max(c.worst_t);
-            loose += GridMesh::build(&d).loose.len();
+            loose += GridMesh::build(&d).unwrap().loose.len();
         }
         shapes += 1;
     }
@@ -196,7 +196,7 @@ fn uniform_rates_are_all_grid() {
     let mesh = limitray::mesh::shapes::rounded_box(2.0);
     for rate in [1, 4, 8, 16, 24] {
         let d = diced(&mesh, DiceRate::Uniform(rate));
-        let g = GridMesh::build(&d);
+        let g = GridMesh::build(&d).unwrap();
         assert!(g.loose.is_empty(), "rate {rate}: {} loose", g.loose.len());
         let quads: usize = g
             .blocks

@@ -39,7 +39,7 @@ fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, Built) {
         },
     )
     .unwrap();
-    let grid = GridMesh::build(&d);
+    let grid = GridMesh::build(&d).unwrap();
     (table, Built { diced: d, grid })
 }
 

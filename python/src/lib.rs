@@ -5,7 +5,8 @@
 //! (`Python::detach`), and returns new arrays. Errors carry the library's messages (what the
 //! CLI prints after `error: `): `OSError` for files, `ValueError` for everything else.
 
-use limitray::bvh::{MeshBvh, Ray64};
+use limitray::bvh::Ray64;
+use limitray::grid::GridMesh;
 use limitray::dice::{dice, DiceOptions, DiceRate};
 use limitray::error::{Error, ErrorKind};
 use limitray::mesh::obj::read_obj;
@@ -51,7 +52,7 @@ struct Surface {
     max_level: usize,
     warnings: Vec<String>,
     /// BVHs of the diced surface, by uniform rate.
-    bvhs: Mutex<HashMap<u32, Arc<MeshBvh>>>,
+    bvhs: Mutex<HashMap<u32, Arc<GridMesh>>>,
 }
 
 fn options_for(
@@ -102,7 +103,7 @@ impl Surface {
         Ok(self.exact.get_or_init(|| t))
     }
 
-    fn bvh(&self, rate: u32) -> Result<Arc<MeshBvh>, Error> {
+    fn bvh(&self, rate: u32) -> Result<Arc<GridMesh>, Error> {
         let mut cache = self
             .bvhs
             .lock()
@@ -111,7 +112,7 @@ impl Surface {
             return Ok(b.clone());
         }
         let d = dice(&self.table, &self.mesh, &dice_options(rate))?;
-        let b = Arc::new(MeshBvh::build(d));
+        let b = Arc::new(GridMesh::build(&d)?);
         cache.insert(rate, b.clone());
         Ok(b)
     }

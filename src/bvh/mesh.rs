@@ -233,7 +233,7 @@ impl MeshBvh {
             n: idx.map(|i| self.diced.normals[i as usize]),
             uv: info.uv,
         }
-        .hit(t, b1, b2, tri, info.face, info.k, info.level)
+        .hit(t, b1, b2, tri, info.face, info.k, info.level, li as u32)
     }
 }
 
@@ -261,6 +261,7 @@ impl Corners {
         face: u32,
         k: u32,
         level: u8,
+        leaf: u32,
     ) -> Hit {
         let (uv, n) = (&self.uv, &self.n);
         let [a, b, c] = self.p;
@@ -293,6 +294,7 @@ impl Corners {
                 ng
             },
             level,
+            leaf,
         }
     }
 }

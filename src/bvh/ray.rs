@@ -83,6 +83,10 @@ pub struct Hit {
     pub ns: [f32; 3],
     /// Subdivision level of the patch at the hit (0 = a base-face B-spline patch).
     pub level: u8,
+    /// Where the structure that was traced holds the triangle: a location in a
+    /// [`crate::grid::GridMesh`] ([`crate::grid::GridMesh::corners`]), or the leaf-ordered
+    /// index of a [`crate::bvh::MeshBvh`].
+    pub leaf: u32,
 }
 
 /// Ray queries against one diced mesh in its own space: the grid core

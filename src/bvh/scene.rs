@@ -1,4 +1,4 @@
-//! A scene of instances: diced meshes (each with its own BVH, shared between instances) placed
+//! A scene of instances: diced meshes (each a [`GridMesh`], shared between instances) placed
 //! by affine transforms, under a top-level CWBVH over the instances' world bounds.
 //!
 //! Rays are carried into each instance's object space (`o' = M⁻¹o`, `d' = M⁻¹d`, so `t` is
@@ -6,9 +6,10 @@
 //! guarantee holds per instance. Instance boxes are padded by a relative `1e-5` to absorb the
 //! rounding of the transform.
 
-use super::mesh::{normalize, MeshBvh};
+use super::mesh::normalize;
 use super::ray::{Hit, Ray};
 use super::triangle::PreparedRay;
+use crate::grid::GridMesh;
 use glam::{Affine3A, Mat3A, Vec3A};
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
@@ -35,7 +36,7 @@ pub(crate) struct Instance {
 /// Instances of diced meshes.
 #[derive(Clone, Debug, Default)]
 pub struct SceneBvh {
-    pub(crate) meshes: Vec<Arc<MeshBvh>>,
+    pub(crate) meshes: Vec<Arc<GridMesh>>,
     pub(crate) instances: Vec<Instance>,
     pub(crate) top: CwBvh,
     /// Instance of each top-level leaf slot.
@@ -61,13 +62,13 @@ impl SceneBvh {
     }
 
     /// Adds a mesh; returns its id.
-    pub fn add_mesh(&mut self, mesh: Arc<MeshBvh>) -> u32 {
+    pub fn add_mesh(&mut self, mesh: Arc<GridMesh>) -> u32 {
         self.meshes.push(mesh);
         self.meshes.len() as u32 - 1
     }
 
     /// The mesh with id `id`.
-    pub fn mesh(&self, id: u32) -> &Arc<MeshBvh> {
+    pub fn mesh(&self, id: u32) -> &Arc<GridMesh> {
         &self.meshes[id as usize]
     }
 
@@ -234,12 +235,12 @@ impl SceneBvh {
         hit
     }
 
-    /// The hit record of leaf triangle `leaf` of instance `instance` at `t` with barycentrics
-    /// `b1, b2`: what [`Self::intersect`] returns for that triangle (the GPU backend's hits are
-    /// completed with it).
-    pub fn hit_record(&self, instance: u32, leaf: usize, t: f32, b1: f32, b2: f32) -> SceneHit {
+    /// The hit record of the triangle at `leaf` ([`Hit::leaf`]) of instance `instance` at `t`
+    /// with barycentrics `b1, b2`: what [`Self::intersect`] returns for that triangle (the GPU
+    /// backend's hits are completed with it).
+    pub fn hit_record(&self, instance: u32, leaf: u32, t: f32, b1: f32, b2: f32) -> SceneHit {
         let inst = &self.instances[instance as usize];
-        let mut h = self.meshes[inst.mesh as usize].hit(leaf, t, b1, b2);
+        let mut h = self.meshes[inst.mesh as usize].hit_at(leaf, t, b1, b2);
         h.ng = self.to_world_normal(inst, h.ng);
         h.ns = self.to_world_normal(inst, h.ns);
         SceneHit { hit: h, instance }

@@ -64,7 +64,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
         )?;
         let t2 = std::time::Instant::now();
         let tris = d.triangles.len();
-        let bvh = GridMesh::build(&d);
+        let bvh = GridMesh::build(&d)?;
         drop(d);
         let t3 = std::time::Instant::now();
         let bounds = bvh.bounds();

@@ -2,9 +2,10 @@
 
 use super::args::{DiceArgs, MeshSource};
 use super::dice::dice_mesh;
-use crate::bvh::{MeshBvh, Ray};
+use crate::bvh::Ray;
 use crate::error::{Error, ErrorKind, Result};
 use crate::gpu::{GpuContext, GpuTracer, PackedScene, TraceOptions};
+use crate::grid::GridMesh;
 use crate::harness::rays::{camera_rays, random_rays};
 
 /// `limitray gpu-info`: the Vulkan adapters, one per line, the automatic choice first.
@@ -59,7 +60,8 @@ pub fn bench_gpu(args: &BenchGpuArgs) -> Result<serde_json::Value> {
     };
     let (_, d) = dice_mesh(&mesh, mesh.options, &dargs)?;
     let tris = d.triangles.len();
-    let bvh = MeshBvh::build(d);
+    let bvh = GridMesh::build(&d)?;
+    drop(d);
     let ctx = GpuContext::new(args.adapter.as_deref())?;
     let tracer = GpuTracer::new(&ctx, PackedScene::from_mesh(&bvh)?, TraceOptions::default())?;
     let threads = args.threads.max(1);
@@ -92,11 +94,7 @@ pub fn bench_gpu(args: &BenchGpuArgs) -> Result<serde_json::Value> {
             .zip(&gpu_hits)
             .filter(|(c, g)| match c {
                 None => g.status != 0,
-                Some(h) => {
-                    g.status != 1
-                        || bvh.tri_index[g.leaf as usize] != h.triangle
-                        || g.t.to_bits() != h.t.to_bits()
-                }
+                Some(h) => g.status != 1 || g.leaf != h.leaf || g.t.to_bits() != h.t.to_bits(),
             })
             .count();
         out[*name] = serde_json::json!({

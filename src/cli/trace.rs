@@ -4,9 +4,10 @@
 
 use super::args::{load, DiceArgs, RuleArgs};
 use super::dice::dice_mesh;
-use crate::bvh::{MeshBvh, Ray, Ray64};
+use crate::bvh::{Ray, Ray64};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::{ExactTrace, ExactTracer};
+use crate::grid::GridMesh;
 use crate::patch::PatchTable;
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
@@ -68,7 +69,8 @@ pub fn run(args: &TraceCmd) -> Result<()> {
         return trace_exact(&tracer, input, output);
     }
     let (_table, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
-    let bvh = MeshBvh::build(d);
+    let bvh = GridMesh::build(&d)?;
+    drop(d);
     match args.backend.backend {
         Backend::Cpu => trace(&bvh, input, output),
         #[cfg(feature = "gpu")]
@@ -176,7 +178,7 @@ pub fn exact_line(x: &ExactTrace) -> String {
 /// line, invalid UTF-8 included (with `stdin:LINE: …` on stderr and an error at the end).
 /// Input is read and answered in batches of [`TRACE_BATCH`] lines, so memory does not grow
 /// with the input.
-pub fn trace(bvh: &MeshBvh, input: impl BufRead, output: impl Write) -> Result<()> {
+pub fn trace(bvh: &GridMesh, input: impl BufRead, output: impl Write) -> Result<()> {
     trace_with(input, output, |rays| {
         let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
         Ok(bvh

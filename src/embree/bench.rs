@@ -495,7 +495,7 @@ fn build_limitray(mesh: &ControlMesh, rate: u32, reps: usize) -> Result<Limitray
         )?;
         drop(table);
         let t2 = Instant::now();
-        let grid = GridMesh::build(&diced);
+        let grid = GridMesh::build(&diced)?;
         let t3 = Instant::now();
         let tris = MeshBvh::build(diced);
         let t4 = Instant::now();

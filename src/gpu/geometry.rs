@@ -1,17 +1,21 @@
-//! The scene on the device: one space of `u32` words (mesh records, CWBVH nodes with the exact
-//! child boxes the CPU traverses, leaf-ordered triangle corners, the top level, instances; laid
+//! The scene on the device: one space of `u32` words (mesh records, each grid mesh's top level,
+//! coordinates, block boxes, block records and loose triangles, the scene's CWBVH over
+//! instances with the exact child boxes the CPU traverses, instances; laid
 //! out in [`super::layout`]) split into up to [`GEO_CHUNKS`] storage bindings, so that a scene
 //! larger than one binding (128 MiB on lavapipe) still works. Word `i` is word
 //! `i & (2^shift − 1)` of chunk `i >> shift`; see `kernels/bvh.wgsl`.
 
 use crate::bvh::mesh::WideBoxes;
-use crate::bvh::{MeshBvh, SceneBvh};
+use crate::bvh::SceneBvh;
 use crate::error::{Error, ErrorKind, Result};
+use crate::grid::node::Box4;
+use crate::grid::GridMesh;
 use wgpu::util::DeviceExt;
 
 use super::layout::{
-    GEO_CHUNKS, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BOX_OFF, MESH_NODE_COUNT,
-    MESH_NODE_OFF, MESH_TRI_COUNT, MESH_VERT_OFF, MESH_WORDS,
+    BLK_BOXES, BLK_DIMS, BLK_NORMAL, BLK_ROOT, BLK_TRI0, BLK_TRI_STRIDE, BLK_VERT, BLK_WORDS,
+    BOX4_WORDS, GEO_CHUNKS, GRID_STACK, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BLOCK_OFF,
+    MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_TOP_OFF, MESH_WORDS,
 };
 use super::GpuContext;
 
@@ -55,35 +59,75 @@ fn push_boxes(words: &mut Vec<u32>, boxes: &[WideBoxes]) {
     }
 }
 
-fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &MeshBvh) -> Result<()> {
-    if m.boxes.len() != m.cwbvh.nodes.len() {
-        return Err(Error::new(
-            ErrorKind::Gpu,
-            "mesh BVH has no exact child boxes for every node",
-        ));
-    }
-    let node_off = offset(words)?;
-    words.extend_from_slice(bytemuck::cast_slice(&m.cwbvh.nodes));
-    let box_off = offset(words)?;
-    push_boxes(words, &m.boxes);
-    let vert_off = offset(words)?;
-    for t in &m.tri_verts {
-        for v in t {
-            words.extend(v.iter().map(|x| x.to_bits()));
+fn push_box4(words: &mut Vec<u32>, b: &Box4) {
+    for side in [&b.lo, &b.hi] {
+        for axis in side {
+            words.extend(axis.iter().map(|x| x.to_bits()));
         }
     }
+}
+
+/// The deepest grid top level the kernels' stack ([`GRID_STACK`] entries) walks.
+pub fn max_grid_depth() -> usize {
+    (GRID_STACK as usize - 1) / 3
+}
+
+fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &GridMesh) -> Result<()> {
+    if m.top.depth > max_grid_depth() {
+        return Err(Error::new(
+            ErrorKind::Gpu,
+            format!(
+                "a mesh's top level is {} nodes deep; the GPU walk holds {} (at most {} levels)",
+                m.top.depth,
+                GRID_STACK,
+                max_grid_depth()
+            ),
+        ));
+    }
+    let top_off = offset(words)?;
+    for n in &m.top.nodes {
+        push_box4(words, &n.boxes);
+        words.extend_from_slice(&n.child);
+    }
+    let coord_off = offset(words)?;
+    words.extend(m.coords.iter().map(|x| x.to_bits()));
+    let box_off = offset(words)?;
+    for b in &m.boxes {
+        push_box4(words, b);
+    }
+    let block_off = offset(words)?;
+    for b in &m.blocks {
+        let mut r = [0u32; BLK_WORDS];
+        let mut w = Vec::with_capacity(BOX4_WORDS);
+        push_box4(&mut w, &b.root);
+        r[BLK_ROOT..BLK_ROOT + BOX4_WORDS].copy_from_slice(&w);
+        r[BLK_VERT] = coord_off + b.vert;
+        r[BLK_BOXES] = box_off + (BOX4_WORDS as u32) * b.boxes;
+        r[BLK_DIMS] = b.cols as u32 | (b.rows as u32) << 8;
+        r[BLK_TRI0] = b.tri0;
+        r[BLK_TRI_STRIDE] = b.tri_stride;
+        r[BLK_NORMAL] = b.normal();
+        words.extend_from_slice(&r);
+    }
+    let loose_off = offset(words)?;
+    for l in &m.loose {
+        for p in &l.p {
+            words.extend(p.iter().map(|x| x.to_bits()));
+        }
+        words.push(l.id);
+    }
     offset(words)?;
-    words[rec + MESH_NODE_OFF] = node_off;
-    words[rec + MESH_NODE_COUNT] = m.cwbvh.nodes.len() as u32;
-    words[rec + MESH_VERT_OFF] = vert_off;
-    words[rec + MESH_TRI_COUNT] = m.tri_verts.len() as u32;
-    words[rec + MESH_BOX_OFF] = box_off;
+    words[rec + MESH_TOP_OFF] = top_off;
+    words[rec + MESH_ROOT] = m.top.root;
+    words[rec + MESH_BLOCK_OFF] = block_off;
+    words[rec + MESH_NBLOCKS] = m.blocks.len() as u32;
+    words[rec + MESH_LOOSE_OFF] = loose_off;
     Ok(())
 }
 
 impl PackedScene {
-    /// One mesh, traced in its own space (as [`MeshBvh::intersect`]).
-    pub fn from_mesh(m: &MeshBvh) -> Result<PackedScene> {
+    /// One mesh, traced in its own space (as [`GridMesh::intersect`]).
+    pub fn from_mesh(m: &GridMesh) -> Result<PackedScene> {
         let mut words = vec![0u32; MESH_WORDS];
         push_mesh(&mut words, 0, m)?;
         Ok(PackedScene {

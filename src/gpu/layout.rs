@@ -1,5 +1,6 @@
 //! The one definition of every word layout the host and the kernels share: the geometry space
-//! (mesh records, CWBVH nodes, exact child boxes, triangles, instances), the ray and hit records
+//! (grid mesh records, their top-level nodes, blocks and loose triangles, the instances' CWBVH
+//! nodes and exact child boxes, instances), the ray and hit records
 //! of the trace kernel, the render block of the path tracer (header, materials, lights,
 //! distributions, environment, transforms), the pixel accumulators, the kind and status codes,
 //! and the uniform block [`Params`].
@@ -39,21 +40,74 @@ shared_consts! {
     /// [`STATUS_OVERFLOW`] (the host turns that into an error) rather than skipping subtrees.
     TRAVERSAL_STACK: u32 = 32;
 
-    // ---- Mesh record (one per mesh, at `Params::mesh_off`).
+    /// Entries of the stack of a mesh's grid top level ([`crate::grid::top`]): a 4-wide
+    /// walk holds at most `3 · depth + 1` entries, and the host refuses a mesh whose top level
+    /// is deeper than this allows (never a silently truncated walk).
+    GRID_STACK: u32 = 64;
+
+    // ---- Mesh record (one per mesh, at `Params::mesh_off`): a grid mesh
+    // ([`crate::grid::GridMesh`]).
     /// Words per mesh record.
     MESH_WORDS: usize = 8;
-    /// Mesh record: word offset of the mesh's CWBVH nodes.
-    MESH_NODE_OFF: usize = 0;
-    /// Mesh record: number of nodes.
-    MESH_NODE_COUNT: usize = 1;
-    /// Mesh record: word offset of the leaf-ordered triangle corners.
-    MESH_VERT_OFF: usize = 2;
-    /// Mesh record: number of triangles.
-    MESH_TRI_COUNT: usize = 3;
-    /// Mesh record: word offset of the nodes' exact child boxes.
-    MESH_BOX_OFF: usize = 4;
+    /// Mesh record: word offset of the top-level nodes (`TOP_WORDS` each).
+    MESH_TOP_OFF: usize = 0;
+    /// Mesh record: the top level's root reference (`TOP_LEAF` set: a primitive; `TOP_EMPTY`:
+    /// an empty mesh).
+    MESH_ROOT: usize = 1;
+    /// Mesh record: word offset of the block records (`BLK_WORDS` each).
+    MESH_BLOCK_OFF: usize = 2;
+    /// Mesh record: number of blocks (primitives below it are blocks, the rest loose
+    /// triangles).
+    MESH_NBLOCKS: usize = 3;
+    /// Mesh record: word offset of the loose triangles (`LOOSE_WORDS` each).
+    MESH_LOOSE_OFF: usize = 4;
 
-    // ---- CWBVH node (obvhs's 80-byte `CwBvhNode`, uploaded as it is).
+    // ---- Four boxes (`Box4`): lo[axis][child], then hi[axis][child].
+    /// Words of a `Box4`.
+    BOX4_WORDS: usize = 24;
+    /// Offset of the upper corners in a `Box4`.
+    BOX4_HI: usize = 12;
+
+    // ---- Grid top-level node (`Node4`): a `Box4`, then four child references.
+    /// Words per top-level node.
+    TOP_WORDS: usize = 28;
+    /// Node: first child reference.
+    TOP_CHILD: usize = 24;
+    /// A child reference to a primitive (block or loose triangle).
+    TOP_LEAF: u32 = crate::grid::top::LEAF;
+    /// An absent child.
+    TOP_EMPTY: u32 = crate::grid::top::EMPTY;
+
+    // ---- Grid block record.
+    /// Words per block record.
+    BLK_WORDS: usize = 32;
+    /// Block: its root `Box4` (words 0..24).
+    BLK_ROOT: usize = 0;
+    /// Block: word offset of its coordinates (row by row: the row's x, then y, then z).
+    BLK_VERT: usize = 24;
+    /// Block: word offset of its four quadrant `Box4`s (blocks of more than 4×4 quads).
+    BLK_BOXES: usize = 25;
+    /// Block: quads across (low byte) and up (second byte).
+    BLK_DIMS: usize = 26;
+    /// Block: the diced-mesh id of its first triangle.
+    BLK_TRI0: usize = 27;
+    /// Block: id step from one quad row to the next.
+    BLK_TRI_STRIDE: usize = 28;
+    /// Block: index of its first vertex's normal (render block, `MX_NORMALS`).
+    BLK_NORMAL: usize = 29;
+    /// Quads per block side (`BLOCK`).
+    GRID_BLOCK: u32 = crate::grid::block::BLOCK as u32;
+    /// A hit location on a loose triangle (`Hit::leaf`, [`crate::grid::LEAF_LOOSE`]).
+    LEAF_LOOSE: u32 = crate::grid::LEAF_LOOSE;
+
+    // ---- Loose triangle record.
+    /// Words per loose triangle: three corners, then its diced-mesh id.
+    LOOSE_WORDS: usize = 10;
+    /// Loose triangle: its id.
+    LOOSE_ID: usize = 9;
+
+    // ---- CWBVH node of the scene's top level over instances (obvhs's 80-byte `CwBvhNode`,
+    // uploaded as it is).
     /// Words per node.
     NODE_WORDS: usize = 20;
     /// Node word whose top byte is `imask` (which children are inner nodes).
@@ -74,7 +128,7 @@ shared_consts! {
     BOX_HI: usize = 24;
 
     // ---- Triangles and instances.
-    /// Words per leaf-ordered triangle: three corners.
+    /// Words per triangle of three corners (mesh lights).
     TRI_WORDS: usize = 9;
     /// Words per instance record.
     INSTANCE_WORDS: usize = 16;
@@ -99,7 +153,7 @@ shared_consts! {
     HIT_STATUS: usize = 0;
     /// Hit: instance.
     HIT_INSTANCE: usize = 1;
-    /// Hit: leaf-ordered triangle.
+    /// Hit: the triangle's location in its mesh ([`crate::bvh::Hit::leaf`]).
     HIT_LEAF: usize = 2;
     /// Hit: t (f32 bits).
     HIT_T: usize = 3;
@@ -290,9 +344,12 @@ shared_consts! {
     XF_NORMAL: usize = 12;
     /// Words per per-mesh record.
     MESH_EXTRA_WORDS: usize = 4;
-    /// Per-mesh record: offset of the corner normals of each leaf-ordered triangle
-    /// (`TRI_WORDS` each).
+    /// Per-mesh record: offset of the unit normals of its blocks' vertices (3 words each, in
+    /// the order of the grid mesh's octahedral normals, decoded).
     MX_NORMALS: usize = 0;
+    /// Per-mesh record: offset of the corner normals of its loose triangles (`TRI_WORDS`
+    /// each).
+    MX_LOOSE_NORMALS: usize = 1;
 
     // ---- Sample dimensions of the counter-based RNG (the CPU renderer's).
     /// Pixel jitter in x.
@@ -341,6 +398,11 @@ const _: () = {
     assert!(offset_of!(CwBvhNode, child_meta) == NODE_META * 4);
     assert!(size_of::<crate::bvh::mesh::WideBoxes>() == BOX_WORDS * 4);
     assert!(BOX_HI == 3 * NODE_CHILDREN);
+    assert!(size_of::<crate::grid::node::Box4>() == BOX4_WORDS * 4);
+    assert!(offset_of!(crate::grid::node::Box4, hi) == BOX4_HI * 4);
+    assert!(size_of::<crate::grid::top::Node4>() == TOP_WORDS * 4);
+    assert!(offset_of!(crate::grid::top::Node4, child) == TOP_CHILD * 4);
+    assert!(BLK_NORMAL < BLK_WORDS && LOOSE_ID < LOOSE_WORDS);
     assert!(CAM_WORDS <= HEADER_WORDS - H_CAMERA);
     assert!(H_MESH_EXTRA < H_CAMERA);
     assert!(ACC_OVERFLOW < ACC_WORDS && HIT_ITERS < HIT_WORDS && RAY_TMAX < RAY_WORDS);

@@ -242,21 +242,29 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
         }
         w.extend_from_slice(&rec);
     }
-    // Per mesh: the limit normals at the corners of each leaf-ordered triangle.
+    // Per mesh: the unit limit normals of its blocks' vertices and of its loose triangles'
+    // corners, decoded as the CPU's hit records decode them.
     let mut normals = Vec::new();
     for m in &world.scene.meshes {
-        normals.push(here(w)?);
-        for &tri in &m.tri_index {
-            for &v in &m.diced.triangles[tri as usize] {
-                let n = m.diced.normals[v as usize];
+        let at = here(w)?;
+        for &code in &m.normals {
+            let n = crate::grid::block::oct_decode(code);
+            w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
+        }
+        let loose_at = here(w)?;
+        for l in &m.loose {
+            for &code in &l.n {
+                let n = crate::grid::block::oct_decode(code);
                 w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
             }
         }
+        normals.push((at, loose_at));
     }
     hdr[H_MESH_EXTRA] = here(w)?;
-    for n in normals {
+    for (n, l) in normals {
         let mut rec = [0u32; MESH_EXTRA_WORDS];
         rec[MX_NORMALS] = n;
+        rec[MX_LOOSE_NORMALS] = l;
         w.extend_from_slice(&rec);
     }
     // Camera.
@@ -477,7 +485,7 @@ impl<'a> GpuRenderer<'a> {
                 if ph.status == STATUS_HIT {
                     let hit = world
                         .scene
-                        .hit_record(ph.instance, ph.leaf as usize, ph.t, ph.b1, ph.b2)
+                        .hit_record(ph.instance, ph.leaf, ph.t, ph.b1, ph.b2)
                         .hit;
                     v.z = hit.t;
                     v.face = hit.face as f32;

@@ -1,5 +1,5 @@
 //! Closest-hit queries on the GPU (`kernels/trace.wgsl`): bitwise the CPU's
-//! [`MeshBvh::intersect`] and [`SceneBvh::intersect`] on a device whose basic arithmetic rounds
+//! [`GridMesh::intersect`] and [`SceneBvh::intersect`] on a device whose basic arithmetic rounds
 //! like Rust's `f32` (lavapipe). The kernel returns `(instance, leaf, t, b1, b2)`; the hit
 //! record is completed on the host by the same code as the CPU path.
 
@@ -10,8 +10,9 @@ use super::layout::{
     STATUS_OVERFLOW,
 };
 use super::GpuContext;
-use crate::bvh::{Hit, MeshBvh, Ray, SceneBvh, SceneHit};
+use crate::bvh::{Hit, Ray, SceneBvh, SceneHit};
 use crate::error::{Error, ErrorKind, Result};
+use crate::grid::GridMesh;
 use wgpu::util::DeviceExt;
 
 pub use super::layout::{Params, WORKGROUP};
@@ -320,10 +321,10 @@ fn check_overflow(raw: &[RawHit]) -> Result<()> {
     }
 }
 
-/// Closest hits of `rays` on one mesh: the answers of [`MeshBvh::intersect`].
+/// Closest hits of `rays` on one mesh: the answers of [`GridMesh::intersect`].
 pub fn trace_mesh(
     ctx: &GpuContext,
-    bvh: &MeshBvh,
+    bvh: &GridMesh,
     rays: &[Ray],
     opts: TraceOptions,
 ) -> Result<Vec<Option<Hit>>> {
@@ -332,7 +333,7 @@ pub fn trace_mesh(
     check_overflow(&raw)?;
     Ok(raw
         .iter()
-        .map(|h| (h.status == STATUS_HIT).then(|| bvh.hit(h.leaf as usize, h.t, h.b1, h.b2)))
+        .map(|h| (h.status == STATUS_HIT).then(|| bvh.hit_at(h.leaf, h.t, h.b1, h.b2)))
         .collect())
 }
 
@@ -349,8 +350,7 @@ pub fn trace_scene(
     Ok(raw
         .iter()
         .map(|h| {
-            (h.status == STATUS_HIT)
-                .then(|| scene.hit_record(h.instance, h.leaf as usize, h.t, h.b1, h.b2))
+            (h.status == STATUS_HIT).then(|| scene.hit_record(h.instance, h.leaf, h.t, h.b1, h.b2))
         })
         .collect())
 }

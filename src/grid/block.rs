@@ -17,10 +17,10 @@ pub struct Block {
     /// The hierarchy's first node: the windows of a block of at most 4×4 quads, else the
     /// quadrants.
     pub root: Box4,
-    /// Offset of the `x` plane in the coordinates (`y`, `z` follow, one plane apart).
+    /// Offset of the `x` plane in the coordinates (`y`, `z` follow, one plane apart). Blocks'
+    /// coordinates are consecutive, three per vertex, so the first vertex's normal is at
+    /// [`Block::normal`]` = vert / 3`.
     pub vert: u32,
-    /// Offset of the first vertex's normal.
-    pub normal: u32,
     /// Offset of the quadrants' [`Box4`] nodes (four, of their windows) when the block has
     /// more than 4×4 quads.
     pub boxes: u32,
@@ -48,6 +48,11 @@ impl Block {
     /// Number of vertices.
     pub fn num_vertices(&self) -> usize {
         (self.cols as usize + 1) * (self.rows as usize + 1)
+    }
+
+    /// Index of the first vertex's normal in [`super::GridMesh::normals`].
+    pub fn normal(&self) -> u32 {
+        self.vert / 3
     }
 
     /// Whether the hierarchy has a quadrant level.
@@ -85,6 +90,9 @@ impl Block {
         ]
     }
 }
+
+// The header is nine 16-byte lines: its root box (six) and 46 bytes of fields.
+const _: () = assert!(std::mem::size_of::<Block>() == 144);
 
 /// Where a node slot of a block's hierarchy leads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

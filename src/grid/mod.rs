@@ -23,6 +23,7 @@ use crate::bvh::mesh::Corners;
 use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion};
+use crate::error::{Error, ErrorKind, Result};
 use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK};
 use node::{front_to_back, test4, Box4};
 use rayon::prelude::*;
@@ -78,6 +79,12 @@ pub struct GridMesh {
     pub bounds: [[f32; 3]; 2],
 }
 
+/// Marks a loose triangle's location in a [`Hit::leaf`] (its index in [`GridMesh::loose`]
+/// below); a location without it is the block `leaf >> 7`, quad row `(leaf >> 4) & 7`, column
+/// `(leaf >> 1) & 7`, half `leaf & 1` (blocks have at most 8×8 quads, and a mesh at most
+/// 2^24 blocks).
+pub const LEAF_LOOSE: u32 = 1 << 31;
+
 /// Where a hit was found.
 #[derive(Clone, Copy, Debug)]
 enum Found {
@@ -85,6 +92,30 @@ enum Found {
     Grid(u32, u8, u8, u8),
     /// Loose triangle.
     Loose(u32),
+}
+
+impl Found {
+    /// The location as a [`Hit::leaf`].
+    fn leaf(self) -> u32 {
+        match self {
+            Found::Grid(b, x, y, h) => (b << 7) | ((y as u32) << 4) | ((x as u32) << 1) | h as u32,
+            Found::Loose(i) => LEAF_LOOSE | i,
+        }
+    }
+
+    /// The location of a [`Hit::leaf`].
+    fn of(leaf: u32) -> Found {
+        if leaf & LEAF_LOOSE != 0 {
+            Found::Loose(leaf & !LEAF_LOOSE)
+        } else {
+            Found::Grid(
+                leaf >> 7,
+                ((leaf >> 1) & 7) as u8,
+                ((leaf >> 4) & 7) as u8,
+                (leaf & 1) as u8,
+            )
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -197,8 +228,9 @@ fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
 
 impl GridMesh {
     /// Builds the grid mesh of `d`; the diced mesh is not kept. Blocks and loose triangles
-    /// are stored in the order of the top level's leaves.
-    pub fn build(d: &DicedMesh) -> GridMesh {
+    /// are stored in the order of the top level's leaves. Fails when the mesh needs more than
+    /// 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
+    pub fn build(d: &DicedMesh) -> Result<GridMesh> {
         let data: Vec<BlockData> = d
             .grids
             .par_iter()
@@ -248,9 +280,21 @@ impl GridMesh {
                 m.bounds[1][a] = m.bounds[1][a].max(b[1][a]);
             }
         }
+        if data.len() >= 1 << 24 || loose.len() >= 1 << 31 {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "the diced mesh has {} grid blocks and {} loose triangles: more than the \
+                     grid core addresses (2^24 blocks, 2^31 loose triangles); raise the \
+                     dicing rate or split the mesh",
+                    data.len(),
+                    loose.len()
+                ),
+            ));
+        }
         if prim_boxes.is_empty() {
             m.coords.extend_from_slice(&[0.0; 4]);
-            return m;
+            return Ok(m);
         }
         let bounds = prim_boxes;
         let mut top = Top::build(&bounds);
@@ -281,7 +325,7 @@ impl GridMesh {
                 let mut h = b.header;
                 h.root = b.boxes[0];
                 h.vert = m.coords.len() as u32;
-                h.normal = m.normals.len() as u32;
+                debug_assert_eq!(h.normal() as usize, m.normals.len());
                 h.boxes = m.boxes.len() as u32;
                 h.level = m.levels.len() as u32;
                 m.coords.extend_from_slice(&b.coords);
@@ -316,7 +360,7 @@ impl GridMesh {
         // Window rows are read four values at a time: the last plane's last row reads past it.
         m.coords.extend_from_slice(&[0.0; 4]);
         m.top = top;
-        m
+        Ok(m)
     }
 
     /// Prefetches what visiting primitive `prim` reads first: a block's header and root, its
@@ -531,30 +575,85 @@ impl GridMesh {
 
     /// The hit record.
     fn hit(&self, best: Best) -> Hit {
-        let (p, n, uv, face, k, level) = match best.at {
+        self.hit_at(best.at.leaf(), best.t, best.b1, best.b2)
+    }
+
+    /// The hit record of the triangle at `leaf` (a [`Hit::leaf`]: see [`LEAF_LOOSE`]) at `t`
+    /// with barycentrics `b1, b2`: what [`Self::intersect`] returns for that triangle (the GPU
+    /// backend's hits are completed with it).
+    pub fn hit_at(&self, leaf: u32, t: f32, b1: f32, b2: f32) -> Hit {
+        let (p, n, uv, id, face, k, level) = match Found::of(leaf) {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
                 let (x, y, h) = (x as usize, y as usize, h as usize);
-                let corners = if h == 0 {
-                    [(x, y), (x + 1, y), (x + 1, y + 1)]
-                } else {
-                    [(x, y), (x + 1, y + 1), (x, y + 1)]
-                };
+                let corners = grid_corners(x, y, h);
                 let w = b.cols as usize + 1;
                 let idx = corners.map(|(cx, cy)| cy * w + cx);
-                let c = &self.coords[b.vert as usize..];
-                let p = corners.map(|(cx, cy)| std::array::from_fn(|a| c[(3 * cy + a) * w + cx]));
-                let n = idx.map(|i| oct_decode(self.normals[b.normal as usize + i]));
+                let n = idx.map(|i| oct_decode(self.normals[b.normal() as usize + i]));
                 let uv = corners.map(|(cx, cy)| b.uv(cx, cy));
                 let level = self.levels[b.level as usize + 2 * (y * b.cols as usize + x) + h];
-                (p, n, uv, b.face, b.k, level)
+                let id = b.triangle(x, y, h);
+                (self.corners(leaf), n, uv, id, b.face, b.k, level)
             }
             Found::Loose(li) => {
                 let l = &self.loose[li as usize];
-                (l.p, l.n.map(oct_decode), l.uv, l.face, l.k, l.level)
+                (l.p, l.n.map(oct_decode), l.uv, l.id, l.face, l.k, l.level)
             }
         };
-        Corners { p, n, uv }.hit(best.t, best.b1, best.b2, best.id, face, k, level)
+        Corners { p, n, uv }.hit(t, b1, b2, id, face, k, level, leaf)
+    }
+
+    /// The corners of the triangle at `leaf` (a [`Hit::leaf`]), in the order the hit's
+    /// barycentrics refer to.
+    pub fn corners(&self, leaf: u32) -> [[f32; 3]; 3] {
+        match Found::of(leaf) {
+            Found::Grid(bi, x, y, h) => {
+                let b = &self.blocks[bi as usize];
+                let w = b.cols as usize + 1;
+                let c = &self.coords[b.vert as usize..];
+                grid_corners(x as usize, y as usize, h as usize)
+                    .map(|(cx, cy)| std::array::from_fn(|a| c[(3 * cy + a) * w + cx]))
+            }
+            Found::Loose(li) => self.loose[li as usize].p,
+        }
+    }
+
+    /// The unit shading normals at the corners of the triangle at `leaf` (decoded).
+    pub fn corner_normals(&self, leaf: u32) -> [[f32; 3]; 3] {
+        match Found::of(leaf) {
+            Found::Grid(bi, x, y, h) => {
+                let b = &self.blocks[bi as usize];
+                let w = b.cols as usize + 1;
+                grid_corners(x as usize, y as usize, h as usize)
+                    .map(|(cx, cy)| oct_decode(self.normals[b.normal() as usize + cy * w + cx]))
+            }
+            Found::Loose(li) => self.loose[li as usize].n.map(oct_decode),
+        }
+    }
+
+    /// Every triangle's corners, in no particular order (for emissive meshes' light sampling).
+    pub fn all_corners(&self) -> Vec<[[f32; 3]; 3]> {
+        let mut out = Vec::with_capacity(self.triangles);
+        for (bi, b) in self.blocks.iter().enumerate() {
+            for y in 0..b.rows {
+                for x in 0..b.cols {
+                    for h in 0..2 {
+                        out.push(self.corners(Found::Grid(bi as u32, x, y, h).leaf()));
+                    }
+                }
+            }
+        }
+        out.extend(self.loose.iter().map(|l| l.p));
+        out
+    }
+}
+
+/// The grid vertices `(x, y)` of half `h` of quad `(x, y)`: `[a, b, c]` or `[a, c, d]`.
+fn grid_corners(x: usize, y: usize, h: usize) -> [(usize, usize); 3] {
+    if h == 0 {
+        [(x, y), (x + 1, y), (x + 1, y + 1)]
+    } else {
+        [(x, y), (x + 1, y + 1), (x, y + 1)]
     }
 }
 

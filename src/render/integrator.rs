@@ -105,8 +105,7 @@ impl World {
     /// `o + t·d` far from the origin).
     fn hit_point(&self, h: &SceneHit) -> Vec3 {
         let mesh = self.scene.mesh(self.scene.instance_mesh(h.instance));
-        let tri = mesh.diced.triangles[h.hit.triangle as usize];
-        let [a, b, c] = tri.map(|i| Vec3::from(mesh.diced.positions[i as usize]));
+        let [a, b, c] = mesh.corners(h.hit.leaf).map(Vec3::from);
         let (b1, b2) = (h.hit.b1, h.hit.b2);
         let p = a * (1.0 - b1 - b2) + b * b1 + c * b2;
         self.transforms[h.instance as usize].transform_point3(p)

@@ -7,9 +7,10 @@ use super::env::{EnvMap, Environment};
 use super::light::{Lights, MeshLight};
 use super::material::Material;
 use super::scene::{Dicing, EnvDesc, MeshDesc, RenderSettings, SceneDesc};
-use crate::bvh::{MeshBvh, SceneBvh};
+use crate::bvh::SceneBvh;
 use crate::dice::{dice, DiceOptions, DiceRate, ScreenRate};
 use crate::error::{Error, ErrorKind, Result};
+use crate::grid::GridMesh;
 use crate::mesh::obj::read_obj;
 use crate::mesh::ControlMesh;
 use crate::patch::{PatchOptions, PatchTable};
@@ -330,18 +331,33 @@ impl World {
         stats.dice_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        let job_bvhs: Vec<Arc<MeshBvh>> = diced
+        // Emissive meshes' triangles, from the diced meshes before they are dropped.
+        let mut light_tris: Vec<Option<Vec<[[f32; 3]; 3]>>> = vec![None; diced.len()];
+        for (m, &job) in desc.meshes.iter().zip(&job_of) {
+            let emissive = matches!(desc.materials[m.material].1,
+                Material::Emissive { radiance } if radiance.max_element() > 0.0);
+            if emissive && light_tris[job].is_none() {
+                let d = &diced[job];
+                light_tris[job] = Some(
+                    d.triangles
+                        .iter()
+                        .map(|t| t.map(|i| d.positions[i as usize]))
+                        .collect(),
+                );
+            }
+        }
+        let job_grids: Vec<Arc<GridMesh>> = diced
             .into_par_iter()
-            .map(|d| Arc::new(MeshBvh::build(d)))
-            .collect();
-        let bvhs: Vec<Arc<MeshBvh>> = job_of.iter().map(|&j| job_bvhs[j].clone()).collect();
+            .map(|d| GridMesh::build(&d).map(Arc::new))
+            .collect::<Result<Vec<_>>>()?;
+        let grids: Vec<Arc<GridMesh>> = job_of.iter().map(|&j| job_grids[j].clone()).collect();
         let mut scene = SceneBvh::new();
         let mut transforms = Vec::new();
         let mut instance_material = Vec::new();
         let mut mesh_lights = Vec::new();
-        let mut mesh_id: Vec<Option<u32>> = vec![None; job_bvhs.len()];
-        for ((m, bvh), &job) in desc.meshes.iter().zip(&bvhs).zip(&job_of) {
-            if bvh.diced.triangles.is_empty() {
+        let mut mesh_id: Vec<Option<u32>> = vec![None; job_grids.len()];
+        for ((m, grid), &job) in desc.meshes.iter().zip(&grids).zip(&job_of) {
+            if grid.triangles == 0 {
                 warnings.push(format!(
                     "{}:{}: mesh {} has no surface (every face a hole?); skipped",
                     scene_name,
@@ -350,12 +366,12 @@ impl World {
                 ));
                 continue;
             }
-            stats.triangles += bvh.diced.triangles.len();
+            stats.triangles += grid.triangles;
             let id = match mesh_id[job] {
                 Some(id) => id,
                 None => {
-                    stats.bytes += bvh.bytes();
-                    let id = scene.add_mesh(bvh.clone());
+                    stats.bytes += grid.bytes();
+                    let id = scene.add_mesh(grid.clone());
                     mesh_id[job] = Some(id);
                     id
                 }
@@ -364,22 +380,13 @@ impl World {
             transforms.push(m.transform);
             instance_material.push(m.material as u32);
             let mat = desc.materials[m.material].1;
-            if let Material::Emissive { radiance } = mat {
-                if radiance.max_element() > 0.0 {
-                    let d = &bvh.diced;
-                    let tris = d
-                        .triangles
-                        .iter()
-                        .map(|t| {
-                            t.map(|i| {
-                                m.transform
-                                    .transform_point3(Vec3::from(d.positions[i as usize]))
-                            })
-                        })
-                        .collect();
-                    if let Some(l) = MeshLight::new(inst, tris, radiance) {
-                        mesh_lights.push(l);
-                    }
+            if let (Material::Emissive { radiance }, Some(tris)) = (mat, &light_tris[job]) {
+                let tris = tris
+                    .iter()
+                    .map(|t| t.map(|p| m.transform.transform_point3(Vec3::from(p))))
+                    .collect();
+                if let Some(l) = MeshLight::new(inst, tris, radiance) {
+                    mesh_lights.push(l);
                 }
             }
         }
