@@ -549,18 +549,24 @@ fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
             if (prim < nblocks) {
                 grid_block(&b, rec, prim, r, anyhit);
             } else {
-                let li = prim - nblocks;
-                let v = gw(rec + MESH_LOOSE_OFF) + LOOSE_WORDS * li;
-                let th = intersect_triangle(r, vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u)),
-                    vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u)),
-                    vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u)), b.tmax);
-                if (th.hit) {
-                    let id = gw(v + LOOSE_ID);
-                    if (anyhit) {
-                        b.hit = true;
-                        b.stop = true;
-                    } else if (!b.hit || th.t < b.t || (th.t == b.t && id < b.id)) {
-                        b = GridBest(true, LEAF_LOOSE | li, id, th.t, th.b1, th.b2, th.t, false);
+                let st = gw(rec + MESH_STRIP_OFF) + STRIP_WORDS * (prim - nblocks);
+                let first = gw(st);
+                let count = gw(st + 1u);
+                for (var li = first; li < first + count; li++) {
+                    let v = gw(rec + MESH_LOOSE_OFF) + LOOSE_WORDS * li;
+                    let th = intersect_triangle(r, vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u)),
+                        vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u)),
+                        vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u)), b.tmax);
+                    if (th.hit) {
+                        let id = gw(v + LOOSE_ID);
+                        if (anyhit) {
+                            b.hit = true;
+                            b.stop = true;
+                            break;
+                        } else if (!b.hit || th.t < b.t || (th.t == b.t && id < b.id)) {
+                            b = GridBest(true, LEAF_LOOSE | li, id, th.t, th.b1, th.b2, th.t,
+                                false);
+                        }
                     }
                 }
             }

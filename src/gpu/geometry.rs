@@ -15,7 +15,7 @@ use wgpu::util::DeviceExt;
 use super::layout::{
     BLK_BOXES, BLK_DIMS, BLK_NORMAL, BLK_ROOT, BLK_TRI0, BLK_TRI_STRIDE, BLK_VERT, BLK_WORDS,
     BOX4_WORDS, GEO_CHUNKS, GRID_STACK, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BLOCK_OFF,
-    MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_TOP_OFF, MESH_WORDS,
+    MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_STRIP_OFF, MESH_TOP_OFF, MESH_WORDS,
 };
 use super::GpuContext;
 
@@ -116,7 +116,12 @@ fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &GridMesh) -> Result<()> {
         }
         words.push(l.id);
     }
+    let strip_off = offset(words)?;
+    for st in &m.strips {
+        words.extend_from_slice(st);
+    }
     offset(words)?;
+    words[rec + MESH_STRIP_OFF] = strip_off;
     words[rec + MESH_TOP_OFF] = top_off;
     words[rec + MESH_ROOT] = m.top.root;
     words[rec + MESH_BLOCK_OFF] = block_off;

@@ -56,11 +56,16 @@ shared_consts! {
     MESH_ROOT: usize = 1;
     /// Mesh record: word offset of the block records (`BLK_WORDS` each).
     MESH_BLOCK_OFF: usize = 2;
-    /// Mesh record: number of blocks (primitives below it are blocks, the rest loose
+    /// Mesh record: number of blocks (primitives below it are blocks, the rest strips of loose
     /// triangles).
     MESH_NBLOCKS: usize = 3;
     /// Mesh record: word offset of the loose triangles (`LOOSE_WORDS` each).
     MESH_LOOSE_OFF: usize = 4;
+    /// Mesh record: word offset of the strips (`STRIP_WORDS` each: first loose triangle,
+    /// count), the top level's primitives from `MESH_NBLOCKS` on.
+    MESH_STRIP_OFF: usize = 5;
+    /// Words per strip.
+    STRIP_WORDS: usize = 2;
 
     // ---- Four boxes (`Box4`): lo[axis][child], then hi[axis][child].
     /// Words of a `Box4`.

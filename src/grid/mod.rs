@@ -5,8 +5,9 @@
 //! octahedral normals; its hierarchy is implicit (quadrants, then 2×2-quad windows, boxes in
 //! [`node::Box4`]), and its leaf test runs on the eight triangles of a window at once
 //! ([`window`]). The triangles outside the grids (zippers between different rates, tiny
-//! domains) are *loose* triangles with their own records. A 4-wide BVH over blocks and loose
-//! triangles is the top level ([`top`]), its boxes exact.
+//! domains) are *loose* triangles with their own records, grouped into strips of at most
+//! [`STRIP`] consecutive triangles of one domain. A 4-wide BVH over blocks and strips is the top
+//! level ([`top`]), its boxes exact.
 //!
 //! The vertices are the diced mesh's `f32` points, copied bit for bit: a vertex on a shared
 //! edge has the same bits in every block and loose triangle that holds it, and every triangle
@@ -65,7 +66,10 @@ pub struct GridMesh {
     pub levels: Vec<u8>,
     /// Triangles outside the grids.
     pub loose: Vec<Loose>,
-    /// Top level over blocks (primitives `0..blocks.len()`) then loose triangles (primitive
+    /// Strips of loose triangles: `[first, count]` in [`Self::loose`], at most [`STRIP`]
+    /// consecutive loose triangles of one domain, each strip one primitive of the top level.
+    pub strips: Vec<[u32; 2]>,
+    /// Top level over blocks (primitives `0..blocks.len()`) then strips (primitive
     /// `blocks.len() + i`).
     pub top: Top,
     /// Per block: offset of its quadrant nodes in `boxes` (`u32::MAX`: none), for the
@@ -78,6 +82,9 @@ pub struct GridMesh {
     /// Bounds of all vertices (`[min, max]`; inverted when empty).
     pub bounds: [[f32; 3]; 2],
 }
+
+/// The most loose triangles in one strip (one top-level primitive).
+pub const STRIP: usize = 8;
 
 /// Marks a loose triangle's location in a [`Hit::leaf`] (its index in [`GridMesh::loose`]
 /// below); a location without it is the block `leaf >> 7`, quad row `(leaf >> 4) & 7`, column
@@ -250,20 +257,32 @@ impl GridMesh {
         };
         let mut prim_boxes: Vec<[[f32; 3]; 2]> = data.iter().map(|b| b.bounds).collect();
         let mut loose = Vec::new();
+        // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
+        // domain's zipper triangles are consecutive, side by side).
+        let mut strips: Vec<[u32; 2]> = Vec::new();
         for (i, t) in d.triangles.iter().enumerate() {
             if covered[i] {
                 continue;
             }
             let info = &d.tri_info[i];
             let p = t.map(|v| d.positions[v as usize]);
-            let mut b = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+            let same = loose.last().is_some_and(|l: &Loose| {
+                l.face == info.face && l.k == info.k && l.id + 1 == i as u32
+            });
+            match strips.last_mut() {
+                Some(s) if same && (s[1] as usize) < STRIP => s[1] += 1,
+                _ => {
+                    strips.push([loose.len() as u32, 1]);
+                    prim_boxes.push([[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]);
+                }
+            }
+            let b = prim_boxes.last_mut().expect("the strip's box");
             for q in p {
                 for a in 0..3 {
                     b[0][a] = b[0][a].min(q[a]);
                     b[1][a] = b[1][a].max(q[a]);
                 }
             }
-            prim_boxes.push(b);
             loose.push(Loose {
                 p,
                 n: t.map(|v| oct_encode(d.normals[v as usize])),
@@ -298,7 +317,7 @@ impl GridMesh {
         }
         let bounds = prim_boxes;
         let mut top = Top::build(&bounds);
-        // Place blocks and loose triangles in the order a depth-first walk meets them.
+        // Place blocks and strips in the order a depth-first walk meets them.
         let mut order = Vec::with_capacity(bounds.len());
         let mut stack = vec![top.root];
         while let Some(r) = stack.pop() {
@@ -313,12 +332,11 @@ impl GridMesh {
         }
         let nblocks = data.len();
         let mut data: Vec<Option<BlockData>> = data.into_iter().map(Some).collect();
-        let mut loose: Vec<Option<Loose>> = loose.into_iter().map(Some).collect();
         let total_coords: usize = data.iter().flatten().map(|b| b.coords.len()).sum();
         m.coords.reserve(total_coords + 4);
         m.blocks.reserve(nblocks);
+        m.loose.reserve(loose.len());
         let mut new_id = vec![0u32; bounds.len()];
-        let mut loose_order = Vec::new();
         for &prim in &order {
             if prim < nblocks {
                 let b = data[prim].take().expect("each block is one leaf");
@@ -338,14 +356,13 @@ impl GridMesh {
                 m.verts.push(h.vert);
                 m.blocks.push(h);
             } else {
-                new_id[prim] = (nblocks + loose_order.len()) as u32;
-                loose_order.push(prim - nblocks);
+                let [first, count] = strips[prim - nblocks];
+                new_id[prim] = (nblocks + m.strips.len()) as u32;
+                m.strips.push([m.loose.len() as u32, count]);
+                m.loose
+                    .extend_from_slice(&loose[first as usize..(first + count) as usize]);
             }
         }
-        m.loose = loose_order
-            .into_iter()
-            .map(|i| loose[i].take().expect("each loose triangle is one leaf"))
-            .collect();
         fn renumber(r: top::Ref, new_id: &[u32]) -> top::Ref {
             if r != top::EMPTY && r & top::LEAF != 0 {
                 top::LEAF | new_id[(r & !top::LEAF) as usize]
@@ -402,6 +419,7 @@ impl GridMesh {
             + self.boxes.len() * std::mem::size_of::<Box4>()
             + self.levels.len()
             + self.loose.len() * std::mem::size_of::<Loose>()
+            + self.strips.len() * 8
             + self.top.bytes()
             + self.quadrants.len() * 4
             + self.verts.len() * 4
@@ -513,19 +531,22 @@ impl GridMesh {
                     let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
                     (t, false)
                 } else {
-                    let li = prim - nblocks;
-                    let tri = &self.loose[li];
-                    let [a, b, c] = tri.p;
-                    if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
-                        if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
-                            best = Some(Best {
-                                at: Found::Loose(li as u32),
-                                id: tri.id,
-                                t,
-                                b1,
-                                b2,
-                            });
-                            return (t, false);
+                    let [first, count] = self.strips[prim - nblocks];
+                    let mut tmax = tmax;
+                    for li in first..first + count {
+                        let tri = &self.loose[li as usize];
+                        let [a, b, c] = tri.p;
+                        if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
+                            if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
+                                best = Some(Best {
+                                    at: Found::Loose(li),
+                                    id: tri.id,
+                                    t,
+                                    b1,
+                                    b2,
+                                });
+                                tmax = t;
+                            }
                         }
                     }
                     (tmax, false)
@@ -555,8 +576,10 @@ impl GridMesh {
                     };
                     hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
                 } else {
-                    let [a, b, c] = self.loose[prim - nblocks].p;
-                    hit = intersect_prepared(&r, a, b, c, tmax).is_some();
+                    let [first, count] = self.strips[prim - nblocks];
+                    hit = self.loose[first as usize..(first + count) as usize]
+                        .iter()
+                        .any(|l| intersect_prepared(&r, l.p[0], l.p[1], l.p[2], tmax).is_some());
                 }
                 (tmax, hit)
             },
