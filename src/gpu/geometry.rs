@@ -16,6 +16,7 @@ use super::layout::{
     BLK_BOXES, BLK_DIMS, BLK_NORMAL, BLK_ROOT, BLK_TRI0, BLK_TRI_STRIDE, BLK_VERT, BLK_WORDS,
     BOX4_WORDS, GEO_CHUNKS, GRID_STACK, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BLOCK_OFF,
     MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_STRIP_OFF, MESH_TOP_OFF, MESH_WORDS,
+    TRAVERSAL_STACK,
 };
 use super::GpuContext;
 
@@ -152,6 +153,17 @@ impl PackedScene {
             return Err(Error::new(
                 ErrorKind::Gpu,
                 "scene top level has no exact child boxes for every node",
+            ));
+        }
+        // The CWBVH walk holds at most one entry per level.
+        if s.top_depth >= TRAVERSAL_STACK as usize {
+            return Err(Error::new(
+                ErrorKind::Gpu,
+                format!(
+                    "the scene's top level over instances is {} nodes deep; the GPU walk holds \
+                     {TRAVERSAL_STACK}",
+                    s.top_depth
+                ),
             ));
         }
         let top_node_off = offset(&words)?;

@@ -36,8 +36,10 @@ shared_consts! {
     WORKGROUP: u32 = 64;
     /// Storage bindings the geometry words may be split into (bindings 1 to 8).
     GEO_CHUNKS: usize = 8;
-    /// Entries of the GPU traversal stack. A ray whose traversal needs more reports
-    /// [`STATUS_OVERFLOW`] (the host turns that into an error) rather than skipping subtrees.
+    /// Entries of the stack of the walk over instances (one per level of their CWBVH): the host
+    /// refuses a scene whose top level is deeper, and a ray whose traversal would still need
+    /// more reports [`STATUS_OVERFLOW`] (the host turns that into an error) rather than
+    /// skipping subtrees.
     TRAVERSAL_STACK: u32 = 32;
 
     /// Entries of the stack of a mesh's grid top level ([`crate::grid::top`]): a 4-wide
