@@ -54,6 +54,21 @@ fn compare(name: &str, d: &DicedMesh, rays: &[Ray]) -> Counts {
         assert_eq!(grid.occluded(ray), a.is_some(), "{name}: ray {i}");
         let (Some(a), Some(b)) = (a, b) else { continue };
         c.hits += 1;
+        // The hit's location gives back its record and the diced triangle's corners.
+        assert_eq!(grid.hit_at(a.leaf, a.t, a.b1, a.b2), a, "{name}: ray {i}");
+        let corners = d.triangles[a.triangle as usize].map(|v| d.positions[v as usize]);
+        assert_eq!(grid.corners(a.leaf), corners, "{name}: ray {i}");
+        let normals = grid.corner_normals(a.leaf);
+        for (n, v) in normals.iter().zip(d.triangles[a.triangle as usize]) {
+            let m = d.normals[v as usize];
+            let dot: f32 = (0..3).map(|k| n[k] * m[k]).sum();
+            // Octahedral normals are within 5e-5 rad (block.rs): cos ≥ 1 − 1.25e-9, below
+            // f32 resolution at 1, so allow the rounding of the dot product.
+            assert!(
+                dot >= 1.0 - 4.0 * f32::EPSILON,
+                "{name}: ray {i}: {n:?} vs {m:?}"
+            );
+        }
         // Each reported triangle, alone, gives the reported t.
         assert_eq!(alone(&a, ray), Some(a.t.to_bits()), "{name}: ray {i}");
         assert_eq!(alone(&b, ray), Some(b.t.to_bits()), "{name}: ray {i}");

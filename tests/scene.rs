@@ -124,6 +124,9 @@ fn deep_hierarchies_are_traversed_completely() {
         });
     }
     let grid = GridMesh::build(&d).unwrap();
+    // Too deep for the GPU walk's stack: refused when packed, with the reason.
+    let e = limitray::gpu::PackedScene::from_mesh(&grid).unwrap_err();
+    assert!(e.to_string().contains("nodes deep"), "{e}");
     let bvh = MeshBvh::build(d);
     eprintln!("depth {}, grid top level {}", bvh.depth, grid.top.depth);
     assert!(

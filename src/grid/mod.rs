@@ -653,22 +653,6 @@ impl GridMesh {
             Found::Loose(li) => self.loose[li as usize].n.map(oct_decode),
         }
     }
-
-    /// Every triangle's corners, in no particular order (for emissive meshes' light sampling).
-    pub fn all_corners(&self) -> Vec<[[f32; 3]; 3]> {
-        let mut out = Vec::with_capacity(self.triangles);
-        for (bi, b) in self.blocks.iter().enumerate() {
-            for y in 0..b.rows {
-                for x in 0..b.cols {
-                    for h in 0..2 {
-                        out.push(self.corners(Found::Grid(bi as u32, x, y, h).leaf()));
-                    }
-                }
-            }
-        }
-        out.extend(self.loose.iter().map(|l| l.p));
-        out
-    }
 }
 
 /// The grid vertices `(x, y)` of half `h` of quad `(x, y)`: `[a, b, c]` or `[a, c, d]`.
