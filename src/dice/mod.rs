@@ -503,15 +503,20 @@ impl DomainCtx<'_> {
             out.points
                 .push(eval_point(self.table, f as u32, k as u32, u, v)?);
         }
+        // A domain that is one patch has one level (no lookup per triangle).
+        let whole = self.table.domain_level(f, k);
         for t in &pat.triangles {
             let uv = t.map(|i| pat.uv(i as usize));
             let (cu, cv) = (
                 (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
                 (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
             );
-            let level = self
-                .table
-                .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?;
+            let level = match whole {
+                Some(l) => l,
+                None => self
+                    .table
+                    .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?,
+            };
             out.triangles.push(t.map(|i| map[i as usize]));
             out.tri_info.push(TriInfo {
                 face: f as u32,

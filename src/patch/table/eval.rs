@@ -110,14 +110,37 @@ impl PatchTable {
         Ok(self.eval(at)?.level)
     }
 
+    /// The level [`Self::level_at`] gives everywhere in domain `(face, k)` when the whole
+    /// domain is one B-spline or single-crease patch; `None` otherwise (or out of range).
+    pub fn domain_level(&self, face: usize, k: usize) -> Option<u8> {
+        if face >= self.num_faces() || k >= self.sub_faces(face) {
+            return None;
+        }
+        match self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize] {
+            Node::Leaf(p) => {
+                let patch = &self.patches[p as usize];
+                matches!(
+                    patch.kind,
+                    PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. }
+                )
+                .then_some(patch.level)
+            }
+            _ => None,
+        }
+    }
+
     /// Evaluates many samples in parallel.
     pub fn eval_batch(&self, samples: &[FaceCoord]) -> Vec<Result<Sample>> {
         use rayon::prelude::*;
         samples.par_iter().map(|&at| self.eval(at)).collect()
     }
 
-    fn grid(&self, first: u32) -> ControlGrid {
-        std::array::from_fn(|i| self.points[first as usize + i])
+    /// The 16 control points from `first`, in place.
+    fn grid(&self, first: u32) -> &ControlGrid {
+        let first = first as usize;
+        self.points[first..first + 16]
+            .try_into()
+            .expect("a B-spline or single-crease patch has 16 control points")
     }
 
     /// Evaluates a leaf at local (s, t); returns the point (derivatives in the leaf's (s, t),
@@ -125,11 +148,11 @@ impl PatchTable {
     fn eval_patch(&self, patch: &Patch, s: f64, t: f64) -> (PatchPoint, Option<Frame>, u8) {
         match patch.kind {
             PatchKind::BSpline { .. } => {
-                (bspline::eval(&self.grid(patch.first_point), s, t), None, 0)
+                (bspline::eval(self.grid(patch.first_point), s, t), None, 0)
             }
             PatchKind::SingleCrease { edge, sharpness } => (
                 single_crease::eval(
-                    &self.grid(patch.first_point),
+                    self.grid(patch.first_point),
                     edge as usize,
                     sharpness as f64,
                     s,
@@ -176,10 +199,12 @@ mod tests {
     #[test]
     fn level_at_is_the_evaluated_level() {
         let mut rng = SplitMix64(8);
+        let mut whole = 0;
         for mesh in [
             crate::mesh::shapes::rounded_box(2.0),
             crate::mesh::shapes::gear(7),
             crate::mesh::shapes::blob(),
+            crate::mesh::generate::grid(6),
         ] {
             let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
             for _ in 0..4000 {
@@ -188,7 +213,12 @@ mod tests {
                 let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
                 let want = table.eval(at).map(|s| s.level).ok();
                 assert_eq!(table.level_at(at).ok(), want, "{at:?}");
+                if let Some(l) = table.domain_level(f, k) {
+                    assert_eq!(Some(l), want, "{at:?}");
+                    whole += 1;
+                }
             }
         }
+        assert!(whole > 1000, "only {whole} samples in whole-patch domains");
     }
 }
