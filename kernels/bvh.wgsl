@@ -193,6 +193,33 @@ fn byte_of(lo: u32, hi: u32, c: u32) -> u32 {
     return (w >> ((c & 3u) * 8u)) & 0xffu;
 }
 
+// The conservative slab test (PreparedRay::hits_box) of one child box whose lower corner's x is
+// at word `lo` (y and z `stride` words apart) and whose upper corner is `hi` words after it:
+// (entry, exit) distances, the box met where entry <= exit. A NaN slab distance keeps the
+// bound (the SSE max/min).
+fn slab(lo: u32, hi: u32, stride: u32, r: PRay, tmax: f32) -> vec2<f32> {
+    var near = r.tmin;
+    var far = tmax;
+    for (var a = 0u; a < 3u; a++) {
+        var nn = gf(lo + stride * a);
+        var ff = gf(lo + hi + stride * a);
+        if (sign_negative(r.inv[a])) {
+            let t = nn;
+            nn = ff;
+            ff = t;
+        }
+        let tn = (nn - r.o[a]) * r.inv[a];
+        let tf = ((ff - r.o[a]) * r.inv[a]) * P.box_scale;
+        if (tn > near) {
+            near = tn;
+        }
+        if (tf < far) {
+            far = tf;
+        }
+    }
+    return vec2<f32>(near, far);
+}
+
 // The node test (wide_hitmask): PreparedRay::hits_box over the exact f32 child boxes that the
 // CPU traverses (BOX_WORDS words at `bx`: lo[axis][child], then hi[axis][child]), with the max/min of
 // the SSE version (a NaN distance keeps the bound). Child order and masks from the node at `n`.
@@ -214,27 +241,8 @@ fn node_hitmask(n: u32, bx: u32, r: PRay, tmax: f32) -> u32 {
         if (byte_of(meta_lo, meta_hi, c) == 0u) {
             continue;
         }
-        var near = r.tmin;
-        var far = tmax;
-        for (var a = 0u; a < 3u; a++) {
-            let lo = gf(bx + NODE_CHILDREN * a + c);
-            let hi = gf(bx + BOX_HI + NODE_CHILDREN * a + c);
-            var nn = lo;
-            var ff = hi;
-            if (sign_negative(r.inv[a])) {
-                nn = hi;
-                ff = lo;
-            }
-            let tn = (nn - r.o[a]) * r.inv[a];
-            let tf = ((ff - r.o[a]) * r.inv[a]) * P.box_scale;
-            if (tn > near) {
-                near = tn;
-            }
-            if (tf < far) {
-                far = tf;
-            }
-        }
-        if (near <= far) {
+        let se = slab(bx + c, BOX_HI, NODE_CHILDREN, r, tmax);
+        if (se.x <= se.y) {
             mask |= byte_of(cbits_lo, cbits_hi, c) << byte_of(bidx_lo, bidx_hi, c);
         }
     }
@@ -344,29 +352,11 @@ fn test4(bx: u32, r: PRay, tmax: f32) -> Box4Hit {
     var out: Box4Hit;
     out.mask = 0u;
     for (var c = 0u; c < 4u; c++) {
-        var near = r.tmin;
-        var far = tmax;
-        for (var a = 0u; a < 3u; a++) {
-            var lo = gf(bx + 4u * a + c);
-            var hi = gf(bx + BOX4_HI + 4u * a + c);
-            if (sign_negative(r.inv[a])) {
-                let t = lo;
-                lo = hi;
-                hi = t;
-            }
-            let tn = (lo - r.o[a]) * r.inv[a];
-            let tf = ((hi - r.o[a]) * r.inv[a]) * P.box_scale;
-            if (tn > near) {
-                near = tn;
-            }
-            if (tf < far) {
-                far = tf;
-            }
-        }
-        if (near <= far) {
+        let se = slab(bx + c, BOX4_HI, 4u, r, tmax);
+        if (se.x <= se.y) {
             out.mask |= 1u << c;
         }
-        out.near[c] = near;
+        out.near[c] = se.x;
     }
     return out;
 }
@@ -405,6 +395,11 @@ struct GridBest {
     b2: f32,
     tmax: f32,
     stop: bool,
+}
+
+// Corner `i` of the loose triangle record at word `v`.
+fn loose_corner(v: u32, i: u32) -> vec3<f32> {
+    return vec3<f32>(gf(v + 3u * i), gf(v + 3u * i + 1u), gf(v + 3u * i + 2u));
 }
 
 // Vertex (x, y) of the block whose coordinates start at `vert`, `w` vertices per row.
@@ -554,9 +549,8 @@ fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
                 let count = gw(st + 1u);
                 for (var li = first; li < first + count; li++) {
                     let v = gw(rec + MESH_LOOSE_OFF) + LOOSE_WORDS * li;
-                    let th = intersect_triangle(r, vec3<f32>(gf(v), gf(v + 1u), gf(v + 2u)),
-                        vec3<f32>(gf(v + 3u), gf(v + 4u), gf(v + 5u)),
-                        vec3<f32>(gf(v + 6u), gf(v + 7u), gf(v + 8u)), b.tmax);
+                    let th = intersect_triangle(r, loose_corner(v, 0u), loose_corner(v, 1u),
+                        loose_corner(v, 2u), b.tmax);
                     if (th.hit) {
                         let id = gw(v + LOOSE_ID);
                         if (anyhit) {
@@ -681,7 +675,7 @@ fn leaf_corners(rec: u32, leaf: u32, normals: u32, loose: u32) -> LeafCorners {
         let li = leaf & ~LEAF_LOOSE;
         let v = gw(rec + MESH_LOOSE_OFF) + LOOSE_WORDS * li;
         for (var i = 0u; i < 3u; i++) {
-            out.p[i] = vec3<f32>(gf(v + 3u * i), gf(v + 3u * i + 1u), gf(v + 3u * i + 2u));
+            out.p[i] = loose_corner(v, i);
             out.n[i] = loose + TRI_WORDS * li + 3u * i;
         }
         return out;

@@ -255,7 +255,7 @@ fn mesh_hits_are_bitwise_the_cpu_hits() {
     // Blocks of 6×6 quads (quadrants of 2×2 windows, some partial) and length-based rates
     // (zipper strips: loose triangles).
     let cube = common::cube_builder().build().unwrap();
-    cases.push(("cube 6".into(), cube.clone(), DiceRate::Uniform(6)));
+    cases.push(("cube 6".into(), cube, DiceRate::Uniform(6)));
     let creased = limitray::mesh::obj::read_obj(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/creased_cube.obj"

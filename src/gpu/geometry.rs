@@ -60,12 +60,13 @@ fn push_boxes(words: &mut Vec<u32>, boxes: &[WideBoxes]) {
     }
 }
 
-fn push_box4(words: &mut Vec<u32>, b: &Box4) {
-    for side in [&b.lo, &b.hi] {
-        for axis in side {
-            words.extend(axis.iter().map(|x| x.to_bits()));
-        }
-    }
+/// A `Box4`'s words: `lo[axis][child]`, then `hi`.
+fn box4_words(b: &Box4) -> [u32; BOX4_WORDS] {
+    std::array::from_fn(|i| {
+        let side = if i < BOX4_WORDS / 2 { &b.lo } else { &b.hi };
+        let j = i % (BOX4_WORDS / 2);
+        side[j / 4][j % 4].to_bits()
+    })
 }
 
 /// The deepest grid top level the kernels' stack ([`GRID_STACK`] entries) walks.
@@ -87,21 +88,19 @@ fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &GridMesh) -> Result<()> {
     }
     let top_off = offset(words)?;
     for n in &m.top.nodes {
-        push_box4(words, &n.boxes);
+        words.extend_from_slice(&box4_words(&n.boxes));
         words.extend_from_slice(&n.child);
     }
     let coord_off = offset(words)?;
     words.extend(m.coords.iter().map(|x| x.to_bits()));
     let box_off = offset(words)?;
     for b in &m.boxes {
-        push_box4(words, b);
+        words.extend_from_slice(&box4_words(b));
     }
     let block_off = offset(words)?;
     for b in &m.blocks {
         let mut r = [0u32; BLK_WORDS];
-        let mut w = Vec::with_capacity(BOX4_WORDS);
-        push_box4(&mut w, &b.root);
-        r[BLK_ROOT..BLK_ROOT + BOX4_WORDS].copy_from_slice(&w);
+        r[BLK_ROOT..BLK_ROOT + BOX4_WORDS].copy_from_slice(&box4_words(&b.root));
         r[BLK_VERT] = coord_off + b.vert;
         r[BLK_BOXES] = box_off + (BOX4_WORDS as u32) * b.boxes;
         r[BLK_DIMS] = b.cols as u32 | (b.rows as u32) << 8;

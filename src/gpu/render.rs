@@ -245,17 +245,19 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
     // Per mesh: the unit limit normals of its blocks' vertices and of its loose triangles'
     // corners, decoded as the CPU's hit records decode them.
     let mut normals = Vec::new();
+    let decoded = |w: &mut Vec<u32>, code: u32| {
+        let n = crate::grid::block::oct_decode(code);
+        w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
+    };
     for m in &world.scene.meshes {
         let at = here(w)?;
         for &code in &m.normals {
-            let n = crate::grid::block::oct_decode(code);
-            w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
+            decoded(w, code);
         }
         let loose_at = here(w)?;
         for l in &m.loose {
             for &code in &l.n {
-                let n = crate::grid::block::oct_decode(code);
-                w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
+                decoded(w, code);
             }
         }
         normals.push((at, loose_at));

@@ -419,7 +419,7 @@ impl GridMesh {
             + self.boxes.len() * std::mem::size_of::<Box4>()
             + self.levels.len()
             + self.loose.len() * std::mem::size_of::<Loose>()
-            + self.strips.len() * 8
+            + self.strips.len() * std::mem::size_of::<[u32; 2]>()
             + self.top.bytes()
             + self.quadrants.len() * 4
             + self.verts.len() * 4
@@ -609,13 +609,10 @@ impl GridMesh {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
                 let (x, y, h) = (x as usize, y as usize, h as usize);
-                let corners = grid_corners(x, y, h);
-                let w = b.cols as usize + 1;
-                let idx = corners.map(|(cx, cy)| cy * w + cx);
-                let n = idx.map(|i| oct_decode(self.normals[b.normal() as usize + i]));
-                let uv = corners.map(|(cx, cy)| b.uv(cx, cy));
+                let uv = grid_corners(x, y, h).map(|(cx, cy)| b.uv(cx, cy));
                 let level = self.levels[b.level as usize + 2 * (y * b.cols as usize + x) + h];
                 let id = b.triangle(x, y, h);
+                let n = self.corner_normals(leaf);
                 (self.corners(leaf), n, uv, id, b.face, b.k, level)
             }
             Found::Loose(li) => {

@@ -334,9 +334,7 @@ impl World {
         // Emissive meshes' triangles, from the diced meshes before they are dropped.
         let mut light_tris: Vec<Option<Vec<[[f32; 3]; 3]>>> = vec![None; diced.len()];
         for (m, &job) in desc.meshes.iter().zip(&job_of) {
-            let emissive = matches!(desc.materials[m.material].1,
-                Material::Emissive { radiance } if radiance.max_element() > 0.0);
-            if emissive && light_tris[job].is_none() {
+            if emitted(desc.materials[m.material].1).is_some() && light_tris[job].is_none() {
                 let d = &diced[job];
                 light_tris[job] = Some(
                     d.triangles
@@ -380,7 +378,7 @@ impl World {
             transforms.push(m.transform);
             instance_material.push(m.material as u32);
             let mat = desc.materials[m.material].1;
-            if let (Material::Emissive { radiance }, Some(tris)) = (mat, &light_tris[job]) {
+            if let (Some(radiance), Some(tris)) = (emitted(mat), &light_tris[job]) {
                 let tris = tris
                     .iter()
                     .map(|t| t.map(|p| m.transform.transform_point3(Vec3::from(p))))
@@ -411,5 +409,13 @@ impl World {
             stats,
             warnings,
         })
+    }
+}
+
+/// The radiance of a material that lights the scene: emissive and not black.
+fn emitted(mat: Material) -> Option<Vec3> {
+    match mat {
+        Material::Emissive { radiance } if radiance.max_element() > 0.0 => Some(radiance),
+        _ => None,
     }
 }
