@@ -510,3 +510,67 @@ fn eval_and_stats_through_the_cli() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A tetrahedron: four triangles, every vertex of valence 3.
+const TETRA: &str = "\
+v 1 1 1
+v -1 -1 1
+v -1 1 -1
+v 1 -1 -1
+f 1 2 3
+f 1 4 2
+f 1 3 4
+f 2 4 3
+";
+
+#[test]
+fn refine_with_the_loop_scheme() {
+    let dir = TempDir::new("loop");
+    let tetra = dir.file("tetra.obj", TETRA);
+    let text = refine_to_file(&dir, &tetra, "tetra1.obj", &["--scheme", "loop"]);
+    // Loop: 4 + 6 vertices, 4·4 triangles.
+    assert_eq!(count_v_f(&text), (10, 16));
+    assert!(text
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .all(|l| l.split_whitespace().count() == 4));
+    // Vertex 0's child is first: valence 3, β = 3/16, so 7/16 of itself and 3/16 of each
+    // neighbour: (7 - 3)/16 = 1/4 in every coordinate. The first edge point of edge 0–1 is
+    // 3/8 (v0 + v1) + 1/8 (v2 + v3) = (0, 0, 3/4 - 1/4) = (0, 0, 1/2).
+    let p = points_of(&text);
+    for c in p[0] {
+        assert!((c - 0.25).abs() < 1e-12, "{:?}", p[0]);
+    }
+    assert!(p[4..].iter().any(|q| q
+        .iter()
+        .zip([0.0, 0.0, 0.5])
+        .all(|(a, b)| (a - b).abs() < 1e-12)));
+
+    // A quad is refused, naming the file, the line and the face.
+    let cube = dir.file("cube.obj", CUBE);
+    let out = dir.path("never.obj");
+    let o = limitray(&[&"refine", &cube, &"--scheme", &"loop", &"-o", &out]);
+    let err = assert_exit_2(&o, "refine --scheme loop on quads");
+    assert!(
+        err.contains("cube.obj:10") && err.contains("face 1") && err.contains("triangles"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a failed run wrote {}", out.display());
+
+    // The limit surface is not there yet: refused with a clear message, nothing written.
+    let o = limitray(&[&"dice", &tetra, &"--scheme", &"loop", &"-o", &out]);
+    let err = assert_exit_2(&o, "dice --scheme loop");
+    assert!(err.contains("Loop") || err.contains("loop"), "{err}");
+    assert!(!out.exists());
+    let o = limitray(&[
+        &"refine",
+        &tetra,
+        &"--scheme",
+        &"loop",
+        &"--limit",
+        &"-o",
+        &out,
+    ]);
+    assert_exit_2(&o, "refine --limit --scheme loop");
+    assert!(!out.exists());
+}

@@ -131,6 +131,71 @@ fn random_meshes_match_far() {
     );
 }
 
+/// Loop refinement (issue 15) on random triangle meshes (`gen::generate_loop`: the Catmark
+/// generator's meshes triangulated, with all its tags, boundary modes, crease rules and
+/// non-manifold features) against Far's `SCHEME_LOOP`, face by face at levels 1–3 (4 on small
+/// meshes). `LIMITRAY_ORACLE_LOOP_MESHES` (default 1000) meshes from `LIMITRAY_ORACLE_SEED`.
+#[test]
+fn random_loop_meshes_match_far() {
+    let Some(bin) = oracle::far::binary() else {
+        return;
+    };
+    let first = env_u64("LIMITRAY_ORACLE_SEED", 0);
+    let count = env_u64("LIMITRAY_ORACLE_LOOP_MESHES", 1000);
+    let dir = std::env::temp_dir().join(format!("limitray-oracle-loop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let results: Vec<_> = (first..first + count)
+        .into_par_iter()
+        .map(|seed| {
+            let mesh = oracle::gen::generate_loop(seed, FEATURES);
+            let levels = if mesh.faces.len() <= 24 { 4 } else { 3 };
+            let path = dir.join(format!("loop-{seed}.obj"));
+            let far = oracle::far::run_scheme(&bin, &path, &mesh.to_obj(), levels, &[], true).ok();
+            let _ = std::fs::remove_file(&path);
+            let out = far.map(|far| oracle::compare::compare_loop_refinement(&mesh, &far));
+            (seed, mesh, out)
+        })
+        .collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut worst = 0.0f64;
+    let mut refused = 0;
+    let mut failures = Vec::new();
+    for (seed, mesh, out) in results {
+        match out {
+            None => refused += 1,
+            Some((w, f)) => {
+                worst = worst.max(w.refine);
+                if let Some(f) = f {
+                    failures.push(format!(
+                        "seed {seed} ({}): {}\n{}",
+                        mesh.recipe,
+                        f.detail,
+                        mesh.to_obj()
+                    ));
+                }
+            }
+        }
+    }
+    println!(
+        "Loop: {count} meshes (Far refused {refused}), worst refine {worst:.2e} of the diagonal"
+    );
+    assert!(
+        refused as u64 * 20 < count,
+        "Far refused {refused} of {count} Loop meshes"
+    );
+    assert!(
+        failures.is_empty(),
+        "{} of {count} Loop meshes differ from Far:\n{}",
+        failures.len(),
+        failures
+            .iter()
+            .take(3)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
 #[test]
 #[ignore = "long: scripts/soak-osd.sh N"]
 fn soak() {

@@ -7,7 +7,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use limitray::mesh::{
-    BoundaryInterpolation, ControlMesh, CreaseMethod, MeshBuilder, Options, SHARPNESS_INFINITE,
+    BoundaryInterpolation, ControlMesh, CreaseMethod, MeshBuilder, Options, Scheme,
+    SHARPNESS_INFINITE,
 };
 use limitray::refine::limit::LimitStencils;
 use limitray::refine::Refiner;
@@ -131,11 +132,18 @@ fn check_refinement(mesh: &ControlMesh, options: Options, what: &str) {
         );
         if l > 0 {
             let parent = &refiner.levels[l - 1];
+            let face_points = match options.scheme {
+                Scheme::Catmark => parent.num_faces(),
+                Scheme::Loop => 0,
+            };
             assert_eq!(
                 level.num_vertices(),
-                parent.num_vertices() + parent.num_faces() + parent.topo.num_edges(),
+                parent.num_vertices() + face_points + parent.topo.num_edges(),
                 "level {l} vertex count: {what}"
             );
+            if options.scheme == Scheme::Loop {
+                assert_eq!(level.num_faces(), 4 * parent.num_faces());
+            }
         }
         for (i, c) in all[l].chunks_exact(3).enumerate() {
             let p = [c[0], c[1], c[2]];
@@ -150,7 +158,13 @@ fn check_refinement(mesh: &ControlMesh, options: Options, what: &str) {
             );
         }
     }
-    for l in 1..=2 {
+    // Limit frames are Catmull-Clark's only so far.
+    let frame_levels: &[usize] = if options.scheme == Scheme::Catmark {
+        &[1, 2]
+    } else {
+        &[]
+    };
+    for &l in frame_levels {
         let level = &refiner.levels[l];
         let pos: Vec<[f64; 3]> = all[l].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         let frames = LimitStencils::new(level, options.crease_method).frames(&pos);
@@ -188,6 +202,7 @@ fn options_strategy() -> impl Strategy<Value = Options> {
                 CreaseMethod::Uniform
             },
             smooth_triangles,
+            scheme: Scheme::Catmark,
         })
 }
 
@@ -245,9 +260,24 @@ fn random_mesh_strategy() -> impl Strategy<Value = Spec> {
             ),
             prop::collection::vec((prop::bool::weighted(0.95), any::<Index>()), 0..=2),
             options_strategy(),
+            prop::bool::weighted(0.3),
         )
             .prop_map(
-                move |(positions, faces, crease_seeds, corner_seeds, hole_seeds, options)| {
+                move |(positions, faces, crease_seeds, corner_seeds, hole_seeds, options, tri)| {
+                    // About a third of the meshes are triangle meshes under the Loop scheme:
+                    // every face cut to its first three vertices (spoiled ones may stay so).
+                    let (faces, options) = if tri {
+                        let faces = faces.into_iter().map(|f| f[..3].to_vec()).collect();
+                        (
+                            faces,
+                            Options {
+                                scheme: Scheme::Loop,
+                                ..options
+                            },
+                        )
+                    } else {
+                        (faces, options)
+                    };
                     let creases = creases_from(&faces, &crease_seeds);
                     // Mostly valid corner and hole indices; sometimes one past the end.
                     let corners = corner_seeds

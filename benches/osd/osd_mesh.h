@@ -65,6 +65,7 @@ struct MeshT {
     Sdc::Options::VtxBoundaryInterpolation boundary = Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER;
     Sdc::Options::CreasingMethod creaseMethod = Sdc::Options::CREASE_UNIFORM;
     Sdc::Options::TriangleSubdivision triangles = Sdc::Options::TRI_SUB_CATMARK;
+    Sdc::SchemeType scheme = Sdc::SCHEME_CATMARK;  // SCHEME_LOOP with the programs' --loop
 };
 
 [[noreturn]] inline void fail(std::string const &msg) {
@@ -252,7 +253,7 @@ inline void onFarWarning(const char *msg) {
     if (!gQuietWarnings) std::fprintf(stderr, "%s: OpenSubdiv warning: %s\n", kProgram, msg);
 }
 
-// The Catmark refiner of `mesh` with its tags and options; exits when Far rejects the topology.
+// The refiner (Catmark, or Loop with `mesh.scheme`) of `mesh` with its tags and options; exits when Far rejects the topology.
 template <class Real>
 Far::TopologyRefiner *createRefiner(MeshT<Real> const &mesh) {
     Far::TopologyDescriptor desc;
@@ -276,7 +277,7 @@ Far::TopologyRefiner *createRefiner(MeshT<Real> const &mesh) {
     sdc.SetTriangleSubdivision(mesh.triangles);
 
     using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-    Far::TopologyRefiner *refiner = Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, sdc));
+    Far::TopologyRefiner *refiner = Factory::Create(desc, Factory::Options(mesh.scheme, sdc));
     if (!refiner || gFarError) fail("OpenSubdiv rejected the mesh topology");
     return refiner;
 }

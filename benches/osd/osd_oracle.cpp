@@ -6,6 +6,10 @@
 //
 // Usage:
 //   osd_oracle MESH.obj [--refine N] [--eval] [--endcap gregory|bspline|legacy] [--isolation L]
+//              [--loop]
+//
+// --loop       Loop subdivision (Sdc::SCHEME_LOOP; every face must be a triangle) instead of
+//              Catmull-Clark. Samples are then "face 0 u v" in Far's triangle parameterisation.
 //
 // --refine N   uniform refinement (TopologyRefiner::RefineUniform, PrimvarRefinerReal<double>)
 //              to levels 1..N; for each level prints
@@ -188,7 +192,7 @@ void evaluate(Mesh const &m, int isolation, Far::PatchTableFactory::Options::End
         }
         char buf[1024];
         int n = face >= 0 && face < nBase ? r->GetLevel(0).GetFaceVertices(int(face)).size() : 0;
-        if (n == 0 || k < 0 || k >= (n == 4 ? 1 : n)) fail("bad sample face/k in '" + text + "'");
+        if (n == 0 || k < 0 || k >= (n == 4 || m.scheme == Sdc::SCHEME_LOOP ? 1 : n)) fail("bad sample face/k in '" + text + "'");
         int id = ptex.GetFaceId(int(face)) + int(k);
         Far::PatchTable::PatchHandle const *h = map.FindPatch(id, u, v);
         if (!h) {
@@ -233,7 +237,7 @@ void evaluate(Mesh const &m, int isolation, Far::PatchTableFactory::Options::End
 void usage() {
     std::fprintf(stderr,
                  "usage: osd_oracle MESH.obj [--refine N] [--eval] [--endcap gregory|bspline|legacy] "
-                 "[--isolation L]\n");
+                 "[--isolation L] [--loop]\n");
     std::exit(2);
 }
 
@@ -244,7 +248,7 @@ int main(int argc, char **argv) {
     Far::SetWarningCallback(onFarWarning);
     std::string path;
     int levels = 0, isolation = 10;
-    bool eval = false;
+    bool eval = false, loop = false;
     auto endcap = Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS;
     for (int a = 1; a < argc; ++a) {
         std::string arg = argv[a];
@@ -257,6 +261,8 @@ int main(int argc, char **argv) {
                 if (isolation < 1 || isolation > 10) throw std::runtime_error("--isolation must be 1..10");
             } else if (arg == "--eval") {
                 eval = true;
+            } else if (arg == "--loop") {
+                loop = true;
             } else if (arg == "--endcap" && a + 1 < argc) {
                 std::string e = argv[++a];
                 if (e == "gregory") endcap = Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS;
@@ -274,6 +280,7 @@ int main(int argc, char **argv) {
     }
     if (path.empty() || (levels == 0 && !eval)) usage();
     Mesh m = osdmesh::readObj<double>(path);
+    if (loop) m.scheme = Sdc::SCHEME_LOOP;
     if (levels > 0) refineUniform(m, levels);
     if (eval) evaluate(m, isolation, endcap);
     return 0;

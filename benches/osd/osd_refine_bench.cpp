@@ -4,7 +4,7 @@
 // Build: scripts/setup-osd.sh  (installs libosd-dev, writes target/osd/osd_refine_bench)
 //
 // Usage:
-//   osd_refine_bench MESH.obj LEVEL [--chaikin] [--reps N] [--dump OUT.obj] [--faces-first]
+//   osd_refine_bench MESH.obj LEVEL [--chaikin] [--loop] [--reps N] [--dump OUT.obj] [--faces-first]
 //   osd_refine_bench --grid N LEVEL [--reps N] [--dump OUT.obj] [--faces-first]
 //
 // Prints one JSON line on stdout. Every *_ms field is the median over --reps repetitions
@@ -156,7 +156,7 @@ const char *boundaryName(Sdc::Options::VtxBoundaryInterpolation b) {
 
 void usage() {
     std::fprintf(stderr,
-                 "usage: osd_refine_bench MESH.obj LEVEL [--chaikin] [--reps N] [--dump OUT.obj] [--faces-first]\n"
+                 "usage: osd_refine_bench MESH.obj LEVEL [--chaikin] [--loop] [--reps N] [--dump OUT.obj] [--faces-first]\n"
                  "       osd_refine_bench --grid N LEVEL [--reps N] [--dump OUT.obj] [--faces-first]\n");
     std::exit(2);
 }
@@ -179,7 +179,7 @@ int main(int argc, char **argv) {
     Far::SetWarningCallback(onFarWarning);
 
     std::vector<std::string> positional;
-    bool chaikin = false, facesFirst = false;
+    bool chaikin = false, facesFirst = false, loop = false;
     int reps = 5;
     long gridN = -1;
     std::string dumpPath;
@@ -187,6 +187,8 @@ int main(int argc, char **argv) {
         std::string arg = argv[a];
         if (arg == "--chaikin") {
             chaikin = true;
+        } else if (arg == "--loop") {
+            loop = true;
         } else if (arg == "--faces-first") {
             facesFirst = true;
         } else if (arg == "--reps") {
@@ -214,6 +216,7 @@ int main(int argc, char **argv) {
 
     Mesh mesh = gridN > 0 ? makeGrid(int(gridN)) : readObj<float>(positional[0]);
     if (chaikin) mesh.creaseMethod = Sdc::Options::CREASE_CHAIKIN;
+    if (loop) mesh.scheme = Sdc::SCHEME_LOOP;
 
     int const nBase = int(mesh.positions.size());
     std::vector<double> tCreate, tRefine, tStencilBuild, tTableBuild, tApply, tPrimvar;

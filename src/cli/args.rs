@@ -4,7 +4,7 @@
 use crate::dice::{DiceOptions, DiceRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::obj::read_obj;
-use crate::mesh::{generate, BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use crate::mesh::{generate, BoundaryInterpolation, ControlMesh, CreaseMethod, Options, Scheme};
 use crate::patch::PatchOptions;
 use std::path::{Path, PathBuf};
 
@@ -29,9 +29,31 @@ impl From<Boundary> for BoundaryInterpolation {
     }
 }
 
-/// Rule overrides: `--chaikin`, `--boundary`, `--smooth-triangles`.
+/// Subdivision scheme on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SchemeArg {
+    /// Catmull-Clark (any polygons).
+    #[default]
+    Catmark,
+    /// Loop (triangles only).
+    Loop,
+}
+
+impl From<SchemeArg> for Scheme {
+    fn from(s: SchemeArg) -> Self {
+        match s {
+            SchemeArg::Catmark => Scheme::Catmark,
+            SchemeArg::Loop => Scheme::Loop,
+        }
+    }
+}
+
+/// Rule overrides: `--scheme`, `--chaikin`, `--boundary`, `--smooth-triangles`.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct RuleArgs {
+    /// Subdivision scheme (default catmark: an OBJ file does not name its scheme).
+    #[arg(long, value_enum)]
+    pub scheme: Option<SchemeArg>,
     /// Use Chaikin's crease rule instead of the uniform one.
     #[arg(long)]
     pub chaikin: bool,
@@ -48,6 +70,9 @@ impl RuleArgs {
     /// The mesh's options with these overrides applied.
     pub fn options(&self, mesh: &ControlMesh) -> Options {
         let mut o = mesh.options;
+        if let Some(s) = self.scheme {
+            o.scheme = s.into();
+        }
         if self.chaikin {
             o.crease_method = CreaseMethod::Chaikin;
         }

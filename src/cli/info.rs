@@ -119,6 +119,7 @@ pub fn summary(name: &str, mesh: &ControlMesh, level: &Level, options: &Options)
         "holes": level.face_hole.iter().filter(|&&h| h).count(),
         "boundary_interpolation": format!("{:?}", options.boundary),
         "crease_method": format!("{:?}", options.crease_method),
+        "scheme": options.scheme.name(),
         "bounds": [lo, hi],
         "warnings": mesh.warnings.len(),
     });

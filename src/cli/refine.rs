@@ -30,6 +30,12 @@ pub fn run(args: &RefineCmd) -> Result<()> {
     let out = open_output(&args.output)?;
     let m = load(&args.mesh)?;
     let opts = args.rules.options(&m);
+    if args.limit && opts.scheme != crate::mesh::Scheme::Catmark {
+        return Err(crate::error::Error::new(
+            crate::error::ErrorKind::Usage,
+            "--limit is not available for the Loop scheme yet",
+        ));
+    }
     let level = args.level;
     let r = Refiner::with_options(&m, opts, level)?;
     for w in &r.warnings {

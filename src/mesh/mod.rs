@@ -37,9 +37,33 @@ pub enum CreaseMethod {
     Chaikin,
 }
 
+/// The subdivision scheme (OpenSubdiv's `Sdc::SchemeType`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Scheme {
+    /// Catmull-Clark: any polygons, quads after one step (paper 001).
+    #[default]
+    Catmark,
+    /// Loop: triangles only, each split into four (paper 002). A mesh with other faces is an
+    /// error, as in OpenSubdiv.
+    Loop,
+}
+
+impl Scheme {
+    /// The scheme's name on the command line and in scenes (`catmark`, `loop`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Catmark => "catmark",
+            Scheme::Loop => "loop",
+        }
+    }
+}
+
 /// Subdivision options that apply to a whole mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Options {
+    /// Subdivision scheme; Catmull-Clark unless the caller says otherwise (an OBJ file does not
+    /// name its scheme).
+    pub scheme: Scheme,
     /// Boundary interpolation; edge-and-corner unless a tag or the caller says otherwise.
     pub boundary: BoundaryInterpolation,
     /// Crease sharpness rule; uniform unless a tag or the caller says otherwise.
@@ -120,6 +144,11 @@ impl ControlMesh {
     /// Number of faces.
     pub fn num_faces(&self) -> usize {
         self.face_offsets.len().saturating_sub(1)
+    }
+
+    /// Number of vertices of face `f`.
+    pub fn face_size(&self, f: usize) -> usize {
+        (self.face_offsets[f + 1] - self.face_offsets[f]) as usize
     }
 
     /// Number of vertices.

@@ -171,6 +171,7 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
             vertex_sharpness,
             face_hole,
             smooth_triangles: level.smooth_triangles,
+            scheme: level.scheme,
         },
         verts_old,
         seed_new,

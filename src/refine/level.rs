@@ -4,7 +4,7 @@
 use super::crease::{self, Rule};
 use crate::error::{ErrorKind, Result};
 use crate::mesh::{
-    BoundaryInterpolation, ControlMesh, Element, Options, Topology, SHARPNESS_INFINITE,
+    BoundaryInterpolation, ControlMesh, Element, Options, Scheme, Topology, SHARPNESS_INFINITE,
 };
 
 /// Topology and tags of one refinement level.
@@ -23,13 +23,28 @@ pub struct Level {
     /// The smooth-triangle edge rule applies ([`crate::mesh::Options::smooth_triangles`]);
     /// it only changes anything where triangles are, i.e. at level 0.
     pub smooth_triangles: bool,
+    /// The scheme that refines this level.
+    pub scheme: Scheme,
 }
 
 impl Level {
     /// Level 0 of `mesh` under `options`. Crease tags on edges that do not exist are ignored
-    /// with a warning, as OpenSubdiv does; the warnings are returned.
+    /// with a warning, as OpenSubdiv does; the warnings are returned. Under the Loop scheme a
+    /// face that is not a triangle is an error naming it (OpenSubdiv refuses such meshes too).
     pub fn base(mesh: &ControlMesh, options: &Options) -> Result<(Level, Vec<String>)> {
         mesh.validate()?;
+        if options.scheme == Scheme::Loop {
+            if let Some(f) = (0..mesh.num_faces()).find(|&f| mesh.face_size(f) != 3) {
+                return Err(mesh.error_at(
+                    ErrorKind::Topology,
+                    Element::Face(f),
+                    format!(
+                        "the Loop scheme needs triangles and this face has {} vertices",
+                        mesh.face_size(f)
+                    ),
+                ));
+            }
+        }
         let topo = Topology::new(mesh.num_vertices(), &mesh.face_offsets, &mesh.face_verts)
             .map_err(|e| {
                 let mut e = e;
@@ -132,6 +147,7 @@ impl Level {
                 vertex_sharpness,
                 face_hole,
                 smooth_triangles: options.smooth_triangles,
+                scheme: options.scheme,
             },
             warnings,
         ))

@@ -1,4 +1,5 @@
-//! Table-driven Catmull-Clark refinement (paper 001 §3.1–3.2, paper 004 §3).
+//! Table-driven Catmull-Clark refinement (paper 001 §3.1–3.2, paper 004 §3) and Loop
+//! refinement (paper 002 §2, [`loop_step`]).
 //!
 //! [`Refiner::new`] analyses topology and tags once and builds one [`StencilTable`] per level;
 //! applying the tables to positions or any other primvar is a separate parallel step, so an
@@ -7,6 +8,8 @@
 pub mod crease;
 pub mod level;
 pub mod limit;
+pub mod loop_rules;
+pub mod loop_step;
 pub mod rules;
 pub mod stencil;
 pub mod step;
@@ -15,7 +18,7 @@ pub use level::Level;
 pub use stencil::{Real, StencilTable};
 
 use crate::error::{Error, ErrorKind, Result};
-use crate::mesh::{ControlMesh, Options};
+use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
 
 /// Deepest uniform refinement the refiner accepts (each level has four times the faces).
 pub const MAX_LEVEL: usize = 12;
@@ -43,6 +46,14 @@ pub fn estimate_bytes(mesh: &ControlMesh, max_level: usize) -> f64 {
         faces *= 4.0;
     }
     total + faces / 4.0 * POSITION_BYTES_PER_FACE
+}
+
+/// One uniform refinement step of `parent` under its own scheme ([`Level::scheme`]).
+pub fn refine_once(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
+    match parent.scheme {
+        Scheme::Catmark => step::refine(parent, method),
+        Scheme::Loop => loop_step::refine(parent, method),
+    }
 }
 
 /// Uniform refinement of a control mesh to a fixed level: every level's topology and tags, and
@@ -82,7 +93,7 @@ impl Refiner {
         let mut levels = vec![base];
         let mut tables = Vec::with_capacity(max_level);
         for _ in 0..max_level {
-            let (child, table) = step::refine(levels.last().unwrap(), options.crease_method);
+            let (child, table) = refine_once(levels.last().unwrap(), options.crease_method);
             levels.push(child);
             tables.push(table);
         }

@@ -112,6 +112,16 @@ fn rule_of(vs: f32, es: &[f32]) -> Rule {
 /// Vertex point: the parent rule's mask, blended with the child rule's mask when the rule
 /// changes at this level (fractional sharpness).
 pub fn vertex_mask(acc: &mut Accumulator, ring: &VertexRing) {
+    vertex_mask_with(acc, ring, smooth_vertex_mask);
+}
+
+/// A scheme's smooth vertex rule: adds `scale` times the mask of `ring`'s centre.
+pub type SmoothMask = fn(&mut Accumulator, &VertexRing, f64);
+
+/// The vertex point of any scheme, given its smooth rule: crease and corner rules and the
+/// blending of a parent rule with a child rule (RenderMan's semantics, OpenSubdiv's
+/// `Sdc::Scheme::ComputeVertexVertexMask`) are the same for Catmull-Clark and Loop.
+pub fn vertex_mask_with(acc: &mut Accumulator, ring: &VertexRing, smooth: SmoothMask) {
     if ring.edge_ends.is_empty() {
         acc.add(ring.center, 1.0);
         return;
@@ -119,7 +129,7 @@ pub fn vertex_mask(acc: &mut Accumulator, ring: &VertexRing) {
     let p = ring.parent_rule();
     let c = ring.child_rule();
     if p == c {
-        rule_mask(acc, ring, p, ring.edge_sharpness, 1.0);
+        rule_mask(acc, ring, p, ring.edge_sharpness, 1.0, smooth);
         return;
     }
     let w = crease::fractional_weight(
@@ -129,14 +139,21 @@ pub fn vertex_mask(acc: &mut Accumulator, ring: &VertexRing) {
         ring.child_edge_sharpness,
     );
     if w > 0.0 {
-        rule_mask(acc, ring, p, ring.edge_sharpness, w);
+        rule_mask(acc, ring, p, ring.edge_sharpness, w, smooth);
     }
     if w < 1.0 {
-        rule_mask(acc, ring, c, ring.child_edge_sharpness, 1.0 - w);
+        rule_mask(acc, ring, c, ring.child_edge_sharpness, 1.0 - w, smooth);
     }
 }
 
-fn rule_mask(acc: &mut Accumulator, ring: &VertexRing, rule: Rule, sharp: &[f32], scale: f64) {
+fn rule_mask(
+    acc: &mut Accumulator,
+    ring: &VertexRing,
+    rule: Rule,
+    sharp: &[f32],
+    scale: f64,
+    smooth: SmoothMask,
+) {
     match rule {
         Rule::Corner => acc.add(ring.center, scale),
         Rule::Crease => {
@@ -147,17 +164,21 @@ fn rule_mask(acc: &mut Accumulator, ring: &VertexRing, rule: Rule, sharp: &[f32]
                 }
             }
         }
-        Rule::Smooth => {
-            let n = ring.edge_ends.len() as f64;
-            acc.add(ring.center, scale * (n - 2.0) / n);
-            let w = scale / (n * n);
-            for &end in ring.edge_ends {
-                acc.add(end, w);
-            }
-            for f in ring.faces {
-                face_mask(acc, f, w);
-            }
-        }
+        Rule::Smooth => smooth(acc, ring, scale),
+    }
+}
+
+/// Catmull-Clark's smooth vertex rule: `(n−2)/n` of the vertex, `1/n²` of each edge end and
+/// each face point.
+fn smooth_vertex_mask(acc: &mut Accumulator, ring: &VertexRing, scale: f64) {
+    let n = ring.edge_ends.len() as f64;
+    acc.add(ring.center, scale * (n - 2.0) / n);
+    let w = scale / (n * n);
+    for &end in ring.edge_ends {
+        acc.add(end, w);
+    }
+    for f in ring.faces {
+        face_mask(acc, f, w);
     }
 }
 

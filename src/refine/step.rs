@@ -45,7 +45,7 @@ fn child_sharpness_at(parent: &Level, method: CreaseMethod, v: usize, out: &mut 
 }
 
 /// Builds table rows for `range` in parallel chunks, with `row` filling one row.
-fn parallel_rows<F>(count: usize, num_inputs: usize, row: F) -> StencilTable
+pub(super) fn parallel_rows<F>(count: usize, num_inputs: usize, row: F) -> StencilTable
 where
     F: Fn(usize, &mut Accumulator) + Sync,
 {
@@ -66,6 +66,89 @@ where
         table.append(p);
     }
     table
+}
+
+/// The child edge (numbered `2e`, `2e + 1` as in [`refine`]) of parent edge `e` that touches
+/// parent vertex `v`: `lead` for the face's edge leaving `v`, otherwise the one arriving at it.
+/// A degenerate edge (both ends `v`, used by one face) leaves `v` by its first half and arrives
+/// by its second.
+pub(super) fn half_edge(topo: &Topology, e: u32, v: u32, lead: bool) -> u32 {
+    let [a, b] = topo.edge_verts[e as usize];
+    2 * e + if a == b { !lead } else { a != v } as u32
+}
+
+/// Child sharpness of each parent edge at each end: `[at v0, at v1]`.
+pub(super) fn edge_halves(parent: &Level, method: CreaseMethod) -> Vec<[f32; 2]> {
+    let topo = &parent.topo;
+    let mut halves = vec![[0.0f32; 2]; topo.num_edges()];
+    if parent.edge_sharpness.iter().any(|&s| s != 0.0) {
+        let mut buf = Vec::new();
+        for v in 0..parent.num_vertices() {
+            child_sharpness_at(parent, method, v, &mut buf);
+            for (&e, &s) in topo.vertex_edges(v).iter().zip(&buf) {
+                let [a, b] = topo.edge_verts[e as usize];
+                if a == b {
+                    // A degenerate edge: both halves end at v.
+                    halves[e as usize] = [s, s];
+                } else {
+                    halves[e as usize][(a != v as u32) as usize] = s;
+                }
+            }
+        }
+    }
+    halves
+}
+
+/// The stencil rows of the children of every parent vertex (child `v` is row `v`), with the
+/// scheme's vertex `mask`; `halves` from [`edge_halves`], `child_vertex_sharpness` indexed by
+/// parent vertex.
+pub(super) fn vertex_rows(
+    parent: &Level,
+    halves: &[[f32; 2]],
+    child_vertex_sharpness: &[f32],
+    mask: fn(&mut Accumulator, &VertexRing),
+) -> StencilTable {
+    let topo = &parent.topo;
+    let nv = parent.num_vertices();
+    parallel_rows(nv, nv, |v, acc| {
+        let edges = topo.vertex_edges(v);
+        let ends: Vec<u32> = edges
+            .iter()
+            .map(|&e| topo.other_vertex(e, v as u32))
+            .collect();
+        let es: Vec<f32> = edges
+            .iter()
+            .map(|&e| parent.edge_sharpness[e as usize])
+            .collect();
+        let cs: Vec<f32> = edges
+            .iter()
+            .map(|&e| {
+                let end = if topo.edge_verts[e as usize][0] == v as u32 {
+                    0
+                } else {
+                    1
+                };
+                halves[e as usize][end]
+            })
+            .collect();
+        let faces: Vec<&[u32]> = topo
+            .vertex_faces(v)
+            .iter()
+            .map(|&f| topo.face_vertices(f as usize))
+            .collect();
+        mask(
+            acc,
+            &VertexRing {
+                center: v as u32,
+                edge_ends: &ends,
+                edge_sharpness: &es,
+                child_edge_sharpness: &cs,
+                faces: &faces,
+                sharpness: parent.vertex_sharpness[v],
+                child_sharpness: child_vertex_sharpness[v],
+            },
+        );
+    })
 }
 
 /// Refines `parent` once under the crease `method`.
@@ -92,13 +175,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             edge_verts.push([child_of_edge(parent, e as usize), cf]);
         }
     }
-    // Half of parent edge e that touches parent vertex v: `lead` for the face's edge leaving
-    // v, otherwise the one arriving at it. A degenerate edge (both ends v, used by one face)
-    // leaves v by its first half and arrives by its second.
-    let half = |e: u32, v: u32, lead: bool| {
-        let [a, b] = topo.edge_verts[e as usize];
-        2 * e + if a == b { !lead } else { a != v } as u32
-    };
+    let half = |e: u32, v: u32, lead: bool| half_edge(topo, e, v, lead);
 
     // Child faces: quad k of face f is (v_k, edge point k, face point, edge point k-1).
     let mut face_offsets = Vec::with_capacity(nfv + 1);
@@ -137,23 +214,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
         edge_verts,
     );
 
-    // Child sharpness of each parent edge at each end: [at v0, at v1].
-    let mut halves = vec![[0.0f32; 2]; ne];
-    if parent.edge_sharpness.iter().any(|&s| s != 0.0) {
-        let mut buf = Vec::new();
-        for v in 0..nv {
-            child_sharpness_at(parent, method, v, &mut buf);
-            for (&e, &s) in topo.vertex_edges(v).iter().zip(&buf) {
-                let [a, b] = topo.edge_verts[e as usize];
-                if a == b {
-                    // A degenerate edge: both halves end at v.
-                    halves[e as usize] = [s, s];
-                } else {
-                    halves[e as usize][(a != v as u32) as usize] = s;
-                }
-            }
-        }
-    }
+    let halves = edge_halves(parent, method);
     let mut edge_sharpness = vec![0.0f32; child_topo.num_edges()];
     for e in 0..ne {
         edge_sharpness[2 * e] = halves[e][0];
@@ -165,45 +226,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
     }
 
     // Stencils: vertex children, face points, edge points.
-    let vertex_rows = parallel_rows(nv, nv, |v, acc| {
-        let edges = topo.vertex_edges(v);
-        let ends: Vec<u32> = edges
-            .iter()
-            .map(|&e| topo.other_vertex(e, v as u32))
-            .collect();
-        let es: Vec<f32> = edges
-            .iter()
-            .map(|&e| parent.edge_sharpness[e as usize])
-            .collect();
-        let cs: Vec<f32> = edges
-            .iter()
-            .map(|&e| {
-                let end = if topo.edge_verts[e as usize][0] == v as u32 {
-                    0
-                } else {
-                    1
-                };
-                halves[e as usize][end]
-            })
-            .collect();
-        let faces: Vec<&[u32]> = topo
-            .vertex_faces(v)
-            .iter()
-            .map(|&f| topo.face_vertices(f as usize))
-            .collect();
-        vertex_mask(
-            acc,
-            &VertexRing {
-                center: v as u32,
-                edge_ends: &ends,
-                edge_sharpness: &es,
-                child_edge_sharpness: &cs,
-                faces: &faces,
-                sharpness: parent.vertex_sharpness[v],
-                child_sharpness: vertex_sharpness[v],
-            },
-        );
-    });
+    let vertex_rows = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
     let face_rows = parallel_rows(nf, nv, |f, acc| face_mask(acc, topo.face_vertices(f), 1.0));
     let edge_rows = parallel_rows(ne, nv, |e, acc| {
         let [a, b] = topo.edge_verts[e];
@@ -234,6 +257,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             vertex_sharpness,
             face_hole,
             smooth_triangles: parent.smooth_triangles,
+            scheme: parent.scheme,
         },
         table,
     )

@@ -68,12 +68,18 @@ pub fn dist(p: &[f64; 3], q: &[f64; 3]) -> f64 {
 
 /// The Catmull-Clark shapes of the OpenSubdiv corpus (`catmark_*.obj`), sorted by name.
 pub fn catmark_files(models: &std::path::Path) -> Vec<PathBuf> {
+    corpus_files(models, "catmark_")
+}
+
+/// The corpus shapes whose names start with `prefix` (`catmark_`, `loop_`), sorted.
+#[allow(dead_code)]
+pub fn corpus_files(models: &std::path::Path, prefix: &str) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(models.join("opensubdiv"))
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| {
             let name = p.file_name().unwrap().to_str().unwrap();
-            name.starts_with("catmark_") && name.ends_with(".obj")
+            name.starts_with(prefix) && name.ends_with(".obj")
         })
         .collect();
     files.sort();

@@ -341,3 +341,94 @@ fn check_sample(
     }
     None
 }
+
+/// Loop refinement of `m` (`Scheme::Loop`) against Far's `SCHEME_LOOP` levels, face by face in
+/// Far's order (both number a level's faces by parent, then by child: corners at the parent's
+/// vertices 0, 1, 2, then the middle), each face's corners matched up to rotation; vertex and
+/// face counts and hole flags must agree. Tolerance [`REFINE_TOL`] of the diagonal.
+pub fn compare_loop_refinement(m: &GenMesh, far: &FarResult) -> (Worst, Option<Failure>) {
+    let mut worst = Worst::default();
+    let fail = |detail: String| Failure {
+        category: "refine",
+        detail,
+        sample: None,
+    };
+    let mut mesh = match parse_obj(&m.to_obj(), Some("oracle.obj")) {
+        Ok(mesh) => mesh,
+        Err(e) => {
+            return (
+                worst,
+                Some(Failure {
+                    category: "rejected",
+                    detail: format!("limitray rejects a mesh Far accepts: {e}"),
+                    sample: None,
+                }),
+            )
+        }
+    };
+    mesh.options.scheme = limitray::mesh::Scheme::Loop;
+    let diag = mesh.diagonal();
+    let r = match Refiner::new(&mesh, far.levels.len()) {
+        Ok(r) => r,
+        Err(e) => {
+            return (
+                worst,
+                Some(Failure {
+                    category: "rejected",
+                    detail: format!("limitray's Loop refiner rejects a mesh Far accepts: {e}"),
+                    sample: None,
+                }),
+            )
+        }
+    };
+    let all = r.interpolate_all(mesh.positions.as_flattened(), 3);
+    for (l, fl) in far.levels.iter().enumerate() {
+        let lvl = &r.levels[l + 1];
+        let pos = &all[l + 1];
+        let p = |v: u32| {
+            let i = v as usize * 3;
+            [pos[i], pos[i + 1], pos[i + 2]]
+        };
+        if lvl.num_vertices() != fl.positions.len() || lvl.num_faces() != fl.faces.len() {
+            let d = format!(
+                "level {}: {} vertices and {} faces, Far {} and {}",
+                l + 1,
+                lvl.num_vertices(),
+                lvl.num_faces(),
+                fl.positions.len(),
+                fl.faces.len()
+            );
+            return (worst, Some(fail(d)));
+        }
+        for (i, (hole, fv)) in fl.faces.iter().enumerate() {
+            let ours = lvl.topo.face_vertices(i);
+            if ours.len() != fv.len() || lvl.face_hole[i] != *hole {
+                let d = format!("level {}: face {i} differs in size or hole flag", l + 1);
+                return (worst, Some(fail(d)));
+            }
+            let n = fv.len();
+            let d = (0..n)
+                .map(|rot| {
+                    (0..n)
+                        .map(|j| {
+                            dist(
+                                p(ours[(j + rot) % n]),
+                                far.levels[l].positions[fv[j] as usize],
+                            )
+                        })
+                        .fold(0.0, f64::max)
+                })
+                .fold(f64::INFINITY, f64::min)
+                / diag;
+            worst.refine = worst.refine.max(d);
+            if d > REFINE_TOL {
+                let d = format!(
+                    "level {}: face {i} is {d:.2e} of the diagonal from Far's",
+                    l + 1
+                );
+                return (worst, Some(fail(d)));
+            }
+        }
+    }
+    (worst, None)
+}

@@ -54,13 +54,30 @@ pub fn run(
     levels: usize,
     samples: &[(usize, usize, f64, f64)],
 ) -> Result<FarResult, String> {
+    run_scheme(bin, path, obj, levels, samples, false)
+}
+
+/// [`run`] under the Loop scheme (`loop_scheme`) or Catmull-Clark.
+pub fn run_scheme(
+    bin: &Path,
+    path: &Path,
+    obj: &str,
+    levels: usize,
+    samples: &[(usize, usize, f64, f64)],
+    loop_scheme: bool,
+) -> Result<FarResult, String> {
     std::fs::write(path, obj).unwrap();
     let mut cmd = Command::new(bin);
     cmd.arg(path);
+    if loop_scheme {
+        cmd.arg("--loop");
+    }
     if levels > 0 {
         cmd.args(["--refine", &levels.to_string()]);
     }
-    cmd.arg("--eval");
+    if !samples.is_empty() || !loop_scheme {
+        cmd.arg("--eval");
+    }
     let mut child = cmd
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())

@@ -491,3 +491,52 @@ pub fn samples(m: &GenMesh, rng: &mut Rng, count: usize) -> Vec<(usize, usize, f
         })
         .collect()
 }
+
+/// A random triangle mesh for the Loop scheme: the mesh of `generate(seed, ..)` (without the
+/// smooth-triangle tag, which Loop ignores) with every quad split along a random diagonal and
+/// every larger face poked into a fan around a lifted centre; a hole face's triangles are all
+/// holes, and creases stay on the edges that remain.
+pub fn generate_loop(seed: u64, features: Features) -> GenMesh {
+    let src = generate(
+        seed,
+        Features {
+            smooth_triangles: false,
+            ..features
+        },
+    );
+    let mut rng = Rng::new(seed ^ 0x6c6f_6f70_0000_0000);
+    let mut m = GenMesh {
+        positions: src.positions.clone(),
+        creases: src.creases.clone(),
+        corners: src.corners.clone(),
+        boundary: src.boundary,
+        chaikin: src.chaikin,
+        ..GenMesh::default()
+    };
+    for (f, face) in src.faces.iter().enumerate() {
+        let first = m.faces.len();
+        match face.len() {
+            3 => m.faces.push(face.clone()),
+            4 => {
+                let r = rng.below(2);
+                let q: Vec<u32> = (0..4).map(|i| face[(i + r) % 4]).collect();
+                m.faces.push(vec![q[0], q[1], q[2]]);
+                m.faces.push(vec![q[0], q[2], q[3]]);
+            }
+            n => {
+                let mut c = m.centroid(face);
+                c[2] += 0.15;
+                let x = m.add_vertex(c);
+                for i in 0..n {
+                    m.faces.push(vec![face[i], face[(i + 1) % n], x]);
+                }
+            }
+        }
+        if src.holes.contains(&(f as u32)) {
+            m.holes.extend(first as u32..m.faces.len() as u32);
+        }
+    }
+    m.compact();
+    m.recipe = format!("{}, triangulated for Loop", src.recipe);
+    m
+}

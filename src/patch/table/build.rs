@@ -7,7 +7,7 @@ use super::end_cap::{CapMesh, CapNode};
 use super::tree::{Frame, Node};
 use super::{Patch, PatchKind, PatchOptions, PatchStats, PatchTable, MAX_LEVEL};
 use crate::error::{Error, ErrorKind, Result};
-use crate::mesh::{ControlMesh, CreaseMethod, Options};
+use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
 use crate::patch::local::{child_face, extract_faces};
 use crate::patch::regular::{classify, RegularKind};
 use crate::patch::stam;
@@ -207,6 +207,17 @@ impl PatchTable {
             ));
         }
         let (base, _) = Level::base(mesh, &options)?;
+        if options.scheme != Scheme::Catmark {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "the {} scheme's limit surface is not available yet: only uniform \
+                     refinement (`limitray refine --scheme {}`) supports it",
+                    options.scheme.name(),
+                    options.scheme.name()
+                ),
+            ));
+        }
         let method = options.crease_method;
         let opts = PatchOptions {
             single_crease: opts.single_crease && method == CreaseMethod::Uniform,
