@@ -557,7 +557,30 @@ fn refine_with_the_loop_scheme() {
     );
     assert!(!out.exists(), "a failed run wrote {}", out.display());
 
-    // The limit surface is not there yet: refused with a clear message, nothing written.
+    // `eval`: at vertex 0 the limit position, by Loop's limit mask for valence 3
+    // (χ = 1/(3 + 3/(8·3/16)) = 1/5): 2/5 v0 + 1/5 (v1 + v2 + v3) = (1/5, 1/5, 1/5). A point
+    // outside the triangle is a bad line: nine `nan`, a message, exit 2.
+    let args: Vec<std::ffi::OsString> = vec![
+        "eval".into(),
+        tetra.clone().into(),
+        "--scheme".into(),
+        "loop".into(),
+    ];
+    let o = common::run_limitray(&args, Some(b"0 0 0\n1 0.75 0.5\n"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let text = stdout(&o);
+    let lines: Vec<&str> = text.lines().collect();
+    let p: Vec<f64> = lines[0]
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    for c in &p[..3] {
+        assert!((c - 0.2).abs() < 1e-14, "{}", lines[0]);
+    }
+    assert!(lines[1].starts_with("nan"), "{text}");
+    assert!(stderr(&o).contains("stdin:2:"), "{}", stderr(&o));
+
+    // Dicing and tracing are not there yet: refused with a clear message, nothing written.
     let o = limitray(&[&"dice", &tetra, &"--scheme", &"loop", &"-o", &out]);
     let err = assert_exit_2(&o, "dice --scheme loop");
     assert!(err.contains("Loop") || err.contains("loop"), "{err}");

@@ -1,9 +1,12 @@
 //! The line-oriented `limitray eval` tool: `face u v` or `face k u v` in, nine numbers out.
+//! Under `--scheme loop` every face is one triangle and `u v` is OpenSubdiv's triangle
+//! parameter (`u, v ≥ 0`, `u + v ≤ 1`).
 
 use super::args::{load, RuleArgs};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
-use crate::patch::{PatchOptions, PatchTable};
+use crate::mesh::Scheme;
+use crate::patch::{LoopSurface, PatchOptions, PatchTable, Sample};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
@@ -22,15 +25,21 @@ pub struct EvalCmd {
 /// Runs `limitray eval` on standard input and output.
 pub fn run_cmd(args: &EvalCmd) -> Result<()> {
     let m = load(&args.mesh)?;
+    let options = args.rules.options(&m);
+    let (stdin, stdout) = (std::io::stdin().lock(), std::io::stdout().lock());
+    if options.scheme == Scheme::Loop {
+        let surface = LoopSurface::new(&m, options)?;
+        return run(|at| surface.eval(at), stdin, stdout);
+    }
     let table = PatchTable::with_options(
         &m,
-        args.rules.options(&m),
+        options,
         PatchOptions {
             max_level: args.max_level,
             ..PatchOptions::default()
         },
     )?;
-    run(&table, std::io::stdin().lock(), std::io::stdout().lock())
+    run(|at| table.eval(at), stdin, stdout)
 }
 
 fn parse_sample(line: &str) -> std::result::Result<FaceCoord, String> {
@@ -59,7 +68,11 @@ fn parse_sample(line: &str) -> std::result::Result<FaceCoord, String> {
 /// Reads samples from `input`, writes one line per input line to `output` (nine `nan` for a bad
 /// sample, invalid UTF-8 included, with a `stdin:LINE:` message on stderr). Streams: one line
 /// in memory at a time ([`crate::lines`]). Returns an error at the end if any line was bad.
-pub fn run(table: &PatchTable, input: impl BufRead, mut output: impl Write) -> Result<()> {
+pub fn run(
+    eval: impl Fn(FaceCoord) -> Result<Sample>,
+    input: impl BufRead,
+    mut output: impl Write,
+) -> Result<()> {
     let mut bad = 0usize;
     let io = |e: std::io::Error| Error::new(ErrorKind::Io, e.to_string());
     for item in crate::lines::lines(input) {
@@ -71,7 +84,7 @@ pub fn run(table: &PatchTable, input: impl BufRead, mut output: impl Write) -> R
         let res = line
             .and_then(|l| parse_sample(&l))
             .map_err(|m| Error::new(ErrorKind::Parse, m))
-            .and_then(|at| table.eval(at));
+            .and_then(&eval);
         match res {
             Ok(s) => {
                 let f = |x: f64| format!("{x:?}");

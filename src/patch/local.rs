@@ -11,7 +11,7 @@
 //! the second ring also keeps the vertices of the first ring complete.
 
 use crate::mesh::{CreaseMethod, Topology};
-use crate::refine::{step, Level};
+use crate::refine::Level;
 use std::collections::HashMap;
 
 /// A level (usually a small neighbourhood) and `width` numbers of data per vertex.
@@ -26,9 +26,9 @@ pub struct LocalMesh {
 }
 
 impl LocalMesh {
-    /// One uniform refinement step of the whole local mesh.
+    /// One uniform refinement step of the whole local mesh, under its level's scheme.
     pub fn refine(&self, method: CreaseMethod) -> LocalMesh {
-        let (level, table) = step::refine(&self.level, method);
+        let (level, table) = crate::refine::refine_once(&self.level, method);
         let data = table.apply(&self.data, self.width);
         LocalMesh {
             level,
@@ -178,7 +178,7 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
     )
 }
 
-/// Index of child `k` of face `f` after [`step::refine`]: children are numbered by the parent's
+/// Index of child `k` of face `f` after [`crate::refine::step::refine`]: children are numbered by the parent's
 /// face-vertex slots.
 pub fn child_face(level: &Level, f: usize, k: usize) -> usize {
     level.topo.face_offsets[f] as usize + k

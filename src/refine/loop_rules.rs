@@ -69,6 +69,55 @@ fn smooth_vertex_mask(acc: &mut Accumulator, ring: &VertexRing, scale: f64) {
     }
 }
 
+/// Weight of each edge neighbour in the limit position of a smooth interior vertex of valence
+/// `n`: `χ = 1 / (n + 3 / (8 β(n)))`, the vertex keeping `1 − n χ` (the dominant left
+/// eigenvector of Loop's subdivision matrix; valence 6 gives 1/12 and 1/2).
+pub fn limit_weight(n: usize) -> f64 {
+    if n == 6 {
+        return 1.0 / 12.0;
+    }
+    1.0 / (n as f64 + 0.375 / beta(n))
+}
+
+/// Limit position mask of vertex `v` of a Loop level whose rule at `v` is stationary (no
+/// semi-sharp vertex or incident edge), as `(vertex, weight)` terms: a corner stays, a crease
+/// vertex takes the cubic B-spline limit `2/3 v + 1/6 (a + b)` of its two sharp edges, a smooth
+/// vertex with no sharp edge Loop's limit mask ([`limit_weight`]). `None` for a dart (one sharp
+/// edge), whose limit has no closed form here, and where anything is still semi-sharp.
+pub fn stationary_limit_mask(level: &super::Level, v: usize) -> Option<Vec<(u32, f64)>> {
+    let topo = &level.topo;
+    let edges = topo.vertex_edges(v);
+    let vs = level.vertex_sharpness[v];
+    if crease::is_semi_sharp(vs)
+        || edges
+            .iter()
+            .any(|&e| crease::is_semi_sharp(level.edge_sharpness[e as usize]))
+    {
+        return None;
+    }
+    let sharp: Vec<u32> = edges
+        .iter()
+        .filter(|&&e| crease::is_sharp(level.edge_sharpness[e as usize]))
+        .map(|&e| topo.other_vertex(e, v as u32))
+        .collect();
+    match crease::vertex_rule(vs, sharp.len()) {
+        crease::Rule::Corner => Some(vec![(v as u32, 1.0)]),
+        crease::Rule::Crease => Some(vec![
+            (v as u32, 2.0 / 3.0),
+            (sharp[0], 1.0 / 6.0),
+            (sharp[1], 1.0 / 6.0),
+        ]),
+        crease::Rule::Smooth if sharp.is_empty() && !edges.is_empty() => {
+            let w = limit_weight(edges.len());
+            let mut out = vec![(v as u32, 1.0 - edges.len() as f64 * w)];
+            out.extend(edges.iter().map(|&e| (topo.other_vertex(e, v as u32), w)));
+            Some(out)
+        }
+        crease::Rule::Smooth if edges.is_empty() => Some(vec![(v as u32, 1.0)]),
+        crease::Rule::Smooth => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -93,6 +142,23 @@ mod tests {
         assert!(((0.625 - c * c) / 6.0 - 0.0625).abs() < 1e-16);
         // Valence 4: cos(π/2) = 0, β = (5/8 − 9/64)/4 = 31/256.
         assert!((beta(4) - 31.0 / 256.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn limit_weight_is_the_fixed_point_of_the_masks() {
+        // The limit mask is a left eigenvector (eigenvalue 1) of the ring's subdivision matrix
+        // restricted to the vertex and its edge neighbours' average: with v' = (1 − nβ) v +
+        // nβ e and e' = 3/8 v + 5/8 e (the average of the edge points: 3/8 v + 3/8 e + 1/8·2 e),
+        // the limit l = a v + (1 − a) e must satisfy a (1 − nβ) + (1 − a) 3/8 = a.
+        for n in 2..30 {
+            let a = 1.0 - n as f64 * limit_weight(n);
+            let nb = n as f64 * beta(n);
+            assert!(
+                (a * (1.0 - nb) + (1.0 - a) * 0.375 - a).abs() < 1e-14,
+                "valence {n}"
+            );
+        }
+        assert!((limit_weight(6) - 1.0 / 12.0).abs() < 1e-17);
     }
 
     #[test]

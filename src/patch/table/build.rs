@@ -211,9 +211,8 @@ impl PatchTable {
             return Err(Error::new(
                 ErrorKind::Usage,
                 format!(
-                    "the {} scheme's limit surface is not available yet: only uniform \
-                     refinement (`limitray refine --scheme {}`) supports it",
-                    options.scheme.name(),
+                    "the {} scheme has no patch table yet, so it cannot be diced, traced or \
+                     rendered: `limitray refine` and `limitray eval` (`LoopSurface`) support it",
                     options.scheme.name()
                 ),
             ));

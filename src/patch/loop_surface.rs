@@ -1,0 +1,325 @@
+//! Exact evaluation of a Loop limit surface at `(face, u, v)` (OpenSubdiv's triangle
+//! parameter: `(0,0)` at the face's vertex 0, `(1,0)` at vertex 1, `(0,1)` at vertex 2).
+//!
+//! Feature-adaptive, on demand: a regular triangle ([`loop_box::gather`]: smooth valence-6
+//! vertices, or regular crease vertices with phantoms) is a box-spline patch evaluated
+//! directly. Any other triangle is cut out of its level with two rings of faces
+//! ([`LocalMesh`]), refined once with the library's Loop rules, and the evaluation descends
+//! into the child triangle that holds the point ([`loop_step::child_uv`]), until the triangle
+//! is regular. A point that stays at an irregular vertex (an extraordinary vertex, a corner,
+//! a dart, a crease vertex of another valence) takes that vertex's exact limit position once
+//! its neighbourhood is stationary ([`stationary_limit_mask`]; a dart's by refining until the
+//! position no longer moves). Points within 2^-[`MAX_DEPTH`] of such a vertex take the
+//! barycentric blend of the exact limit positions of their tiny triangle's corners, which is
+//! the surface to within the square of that size.
+//!
+//! Derivatives are with respect to `(u, v)`. At an irregular vertex itself the parametric
+//! derivatives do not exist (they vanish or diverge as the characteristic map's eigenvalue
+//! is below or above ½); there `du`, `dv` are the secants to the points at `2^-24` along the
+//! face's two edges from that vertex, which lie in the tangent plane to within that distance,
+//! and the second derivatives are zero.
+
+use super::local::LocalMesh;
+use super::loop_box::{self, Point};
+use super::table::Sample;
+use crate::coord::FaceCoord;
+use crate::error::{Error, ErrorKind, Result};
+use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
+use crate::refine::crease;
+use crate::refine::loop_rules::stationary_limit_mask;
+use crate::refine::loop_step::child_uv;
+use crate::refine::Level;
+
+/// Deepest descent towards an irregular vertex.
+pub const MAX_DEPTH: usize = 60;
+
+/// Levels a dart's limit position is refined for at most.
+const DART_LEVELS: usize = 200;
+
+/// A Loop control mesh ready to be evaluated.
+#[derive(Clone, Debug)]
+pub struct LoopSurface {
+    level: Level,
+    /// Control positions, three numbers per vertex.
+    positions: Vec<f64>,
+    method: CreaseMethod,
+}
+
+impl LoopSurface {
+    /// The surface of `mesh` under `options` (whose scheme must be Loop).
+    pub fn new(mesh: &ControlMesh, options: Options) -> Result<Self> {
+        if options.scheme != Scheme::Loop {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "LoopSurface needs the Loop scheme",
+            ));
+        }
+        let (level, _) = Level::base(mesh, &options)?;
+        Ok(LoopSurface {
+            level,
+            positions: mesh.positions.as_flattened().to_vec(),
+            method: options.crease_method,
+        })
+    }
+
+    /// Number of faces (each one triangle, one parameter domain).
+    pub fn num_faces(&self) -> usize {
+        self.level.num_faces()
+    }
+
+    /// Position and derivatives at `at` (`at.k` must be 0). Holes and parameters outside the
+    /// triangle (`u, v ≥ 0`, `u + v ≤ 1`) are errors.
+    pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        let f = at.face as usize;
+        let bad = |m: String| Err(Error::new(ErrorKind::Usage, m));
+        if f >= self.num_faces() {
+            return bad(format!(
+                "face {} is out of range ({} faces)",
+                at.face,
+                self.num_faces()
+            ));
+        }
+        if at.k != 0 {
+            return bad(format!(
+                "face {}: a triangle has no sub-face {}",
+                at.face, at.k
+            ));
+        }
+        let (u, v) = (at.u, at.v);
+        if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-12) {
+            return bad(format!(
+                "({u}, {v}) is outside the triangle u, v ≥ 0, u + v ≤ 1"
+            ));
+        }
+        if self.level.face_hole[f] {
+            return bad(format!("face {} is a hole", at.face));
+        }
+        let local = LocalMesh::extract(&self.level, &self.positions, 3, f, 2);
+        Ok(self.descend(local, u, v, true))
+    }
+
+    /// Evaluates at `(u, v)` of face 0 of `local`; `derivatives: false` skips the secants at
+    /// an irregular vertex (its derivatives are then zero).
+    fn descend(&self, mut local: LocalMesh, mut u: f64, mut v: f64, derivatives: bool) -> Sample {
+        // d/d(face param) = scale · d/d(current param), per axis with sign.
+        let mut scale = 1.0f64;
+        for depth in 0..=MAX_DEPTH {
+            let pos = |i: u32| point(&local, i);
+            if let Some(cps) = loop_box::gather(&local.level, 0) {
+                let cps: [[f64; 3]; 12] = cps.map(|p: Point| p.position(pos));
+                let r = loop_box::eval(&cps, u, v);
+                return sample(r, scale, depth);
+            }
+            let fv = local.level.topo.face_vertices(0);
+            let corner = if u == 0.0 && v == 0.0 {
+                Some(0)
+            } else if u == 1.0 && v == 0.0 {
+                Some(1)
+            } else if u == 0.0 && v == 1.0 {
+                Some(2)
+            } else {
+                None
+            };
+            // At an irregular vertex the descent would never end: take its limit. (A regular
+            // vertex's corner triangle becomes a regular patch after a few levels.)
+            if let Some(c) = corner.filter(|&c| !loop_box::regular_vertex(&local.level, fv[c], 0)) {
+                if let Some(p) = self.vertex_limit(&local, fv[c]) {
+                    if !derivatives {
+                        let z = [0.0; 3];
+                        return sample([p, z, z, z, z, z], scale, depth);
+                    }
+                    return self.at_vertex(&local, c, p, scale, depth);
+                }
+            }
+            if depth == MAX_DEPTH {
+                // A triangle 2^-60 across: its corners' limits, blended.
+                let mut p = [0.0; 3];
+                let w = [1.0 - u - v, u, v];
+                for c in 0..3 {
+                    let l = self
+                        .vertex_limit_refined(&local, fv[c])
+                        .unwrap_or_else(|| pos(fv[c]));
+                    for x in 0..3 {
+                        p[x] += w[c] * l[x];
+                    }
+                }
+                return sample(
+                    [p, [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]],
+                    scale,
+                    depth,
+                );
+            }
+            let refined = local.refine(self.method);
+            let (k, s, t) = child_of(u, v);
+            let sign = if k == 3 { -2.0 } else { 2.0 };
+            scale *= sign;
+            local = LocalMesh::extract(&refined.level, &refined.data, 3, k, 2);
+            u = s;
+            v = t;
+        }
+        unreachable!("the loop returns at MAX_DEPTH")
+    }
+
+    /// The exact limit position of `local`'s vertex `x` when its neighbourhood is stationary
+    /// (closed form) or a stationary dart (refined until it stops moving); `None` while
+    /// anything at it is still semi-sharp.
+    fn vertex_limit(&self, local: &LocalMesh, x: u32) -> Option<[f64; 3]> {
+        if let Some(mask) = stationary_limit_mask(&local.level, x as usize) {
+            return Some(apply(&mask, |i| point(local, i)));
+        }
+        let lvl = &local.level;
+        let semi = crease::is_semi_sharp(lvl.vertex_sharpness[x as usize])
+            || lvl
+                .topo
+                .vertex_edges(x as usize)
+                .iter()
+                .any(|&e| crease::is_semi_sharp(lvl.edge_sharpness[e as usize]));
+        if semi {
+            return None;
+        }
+        Some(self.dart_limit(local, x))
+    }
+
+    /// [`Self::vertex_limit`], refining first until the vertex is stationary.
+    fn vertex_limit_refined(&self, local: &LocalMesh, x: u32) -> Option<[f64; 3]> {
+        let mut cur = local.clone();
+        let mut x = x;
+        for _ in 0..=crate::refine::MAX_LEVEL {
+            if let Some(p) = self.vertex_limit(&cur, x) {
+                return Some(p);
+            }
+            (cur, x) = self.refine_at(&cur, x)?;
+        }
+        None
+    }
+
+    /// Refines `local` once and cuts it down again around vertex `x` (which keeps its index
+    /// as a child of a vertex); returns the new local mesh and `x`'s index in it.
+    fn refine_at(&self, local: &LocalMesh, x: u32) -> Option<(LocalMesh, u32)> {
+        let refined = local.refine(self.method);
+        let topo = &refined.level.topo;
+        let &f = topo.vertex_faces(x as usize).first()?;
+        let (cut, map) =
+            LocalMesh::extract_with_map(&refined.level, &refined.data, 3, f as usize, 2);
+        let nx = map.iter().position(|&o| o == x)? as u32;
+        Some((cut, nx))
+    }
+
+    /// A dart's limit: refine around it until its position stops changing.
+    fn dart_limit(&self, local: &LocalMesh, x: u32) -> [f64; 3] {
+        let mut cur = local.clone();
+        let mut x = x;
+        let mut p = point(&cur, x);
+        for _ in 0..DART_LEVELS {
+            let Some((next, nx)) = self.refine_at(&cur, x) else {
+                break;
+            };
+            let q = point(&next, nx);
+            let moved = (0..3).map(|i| (q[i] - p[i]).abs()).fold(0.0, f64::max);
+            let size = q.iter().map(|c| c.abs()).fold(1e-300, f64::max);
+            cur = next;
+            x = nx;
+            p = q;
+            if moved <= 1e-17 * size {
+                break;
+            }
+        }
+        p
+    }
+
+    /// The sample at corner `c` of the current triangle, an irregular vertex with limit `p`:
+    /// secant derivatives along the triangle's two edges from `c`.
+    fn at_vertex(
+        &self,
+        local: &LocalMesh,
+        c: usize,
+        p: [f64; 3],
+        scale: f64,
+        depth: usize,
+    ) -> Sample {
+        let h = (2.0f64).powi(-24);
+        // Points along the edges from corner c, in the current triangle's parameter.
+        let (a, b) = match c {
+            0 => ((h, 0.0), (0.0, h)),
+            1 => ((1.0 - h, 0.0), (1.0 - h, h)),
+            _ => ((0.0, 1.0 - h), (h, 1.0 - h)),
+        };
+        let pa = self.descend(local.clone(), a.0, a.1, false).p;
+        let pb = self.descend(local.clone(), b.0, b.1, false).p;
+        let sec = |q: [f64; 3]| [0, 1, 2].map(|i| (q[i] - p[i]) / h);
+        let (sa, sb) = (sec(pa), sec(pb));
+        // Express the secants as d/du and d/dv of the current triangle.
+        let (du, dv) = match c {
+            0 => (sa, sb),
+            // From vertex 1: a = −u direction, b = −u + v.
+            1 => {
+                let du = sa.map(|x| -x);
+                let dv = [0, 1, 2].map(|i| sb[i] + du[i]);
+                (du, dv)
+            }
+            // From vertex 2: a = −v, b = u − v.
+            _ => {
+                let dv = sa.map(|x| -x);
+                let du = [0, 1, 2].map(|i| sb[i] + dv[i]);
+                (du, dv)
+            }
+        };
+        sample([p, du, dv, [0.0; 3], [0.0; 3], [0.0; 3]], scale, depth)
+    }
+}
+
+fn point(local: &LocalMesh, i: u32) -> [f64; 3] {
+    let d = local.point(i as usize);
+    [d[0], d[1], d[2]]
+}
+
+fn apply(mask: &[(u32, f64)], pos: impl Fn(u32) -> [f64; 3]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for &(i, w) in mask {
+        let p = pos(i);
+        for x in 0..3 {
+            out[x] += w * p[x];
+        }
+    }
+    out
+}
+
+/// The child triangle holding `(u, v)` and the point's parameter in it (inverse of
+/// [`child_uv`]; every operation is exact).
+fn child_of(u: f64, v: f64) -> (usize, f64, f64) {
+    let k = if u >= 0.5 {
+        1
+    } else if v >= 0.5 {
+        2
+    } else if u + v <= 0.5 {
+        0
+    } else {
+        3
+    };
+    let (s, t) = match k {
+        0 => (2.0 * u, 2.0 * v),
+        1 => (2.0 * u - 1.0, 2.0 * v),
+        2 => (2.0 * u, 2.0 * v - 1.0),
+        _ => (1.0 - 2.0 * u, 1.0 - 2.0 * v),
+    };
+    debug_assert!({
+        let (pu, pv) = child_uv(k, s, t);
+        (pu - u).abs() < 1e-15 && (pv - v).abs() < 1e-15
+    });
+    (k, s.max(0.0), t.max(0.0))
+}
+
+/// A sample from `[p, du, dv, duu, duv, dvv]` in the current triangle's parameter, whose
+/// derivatives scale by `scale` (first) and `scale²` (second) to the face's.
+fn sample(r: [[f64; 3]; 6], scale: f64, depth: usize) -> Sample {
+    let s2 = scale * scale;
+    Sample {
+        p: r[0],
+        du: r[1].map(|x| x * scale),
+        dv: r[2].map(|x| x * scale),
+        duu: r[3].map(|x| x * s2),
+        duv: r[4].map(|x| x * s2),
+        dvv: r[5].map(|x| x * s2),
+        level: depth as u8,
+    }
+}
