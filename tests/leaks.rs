@@ -30,6 +30,10 @@ struct Built {
 
 fn build(mesh: &ControlMesh, rate: u32) -> (PatchTable, Built) {
     let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
+    build_from(table, mesh, rate)
+}
+
+fn build_from(table: PatchTable, mesh: &ControlMesh, rate: u32) -> (PatchTable, Built) {
     let d = dice(
         &table,
         mesh,
@@ -187,4 +191,49 @@ fn corpus_closed_shapes_do_not_leak() {
     }
     eprintln!("{cases} cases, {rays} rays, 0 misses");
     assert!(cases >= 200, "only {cases} cases");
+}
+
+/// The Loop scheme (issue 15): every closed loop shape of the corpus under `Scheme::Loop`,
+/// each triangle diced as three sub-quads sharing its edges and spokes, at rates 1–64, at the
+/// origin and far from it, 300k random rays per case plus the aimed ones.
+#[test]
+fn corpus_closed_loop_shapes_do_not_leak() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mut cases = 0;
+    let mut rays = 0usize;
+    for path in common::corpus_files(&models, "loop_") {
+        let Ok(mut mesh) = read_obj(&path) else {
+            continue;
+        };
+        if !common::closed(&mesh) {
+            continue;
+        }
+        mesh.options.scheme = limitray::mesh::Scheme::Loop;
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        for rate in RATES {
+            // Three sub-quads of (r/2)² quads per triangle: ~1.5 r² triangles.
+            let estimate = 3 * (rate as usize).pow(2) * mesh.num_faces() / 2;
+            if estimate > MAX_TRIANGLES {
+                eprintln!("note: {name} rate {rate}: ~{estimate} triangles; skipped");
+                continue;
+            }
+            for by in [[0.0; 3], FAR] {
+                let m = translated(&mesh, by);
+                let table = PatchTable::new(&m, PatchOptions::default()).unwrap();
+                let (_, bvh) = build_from(table, &m, rate);
+                let cast = probe(
+                    &format!("{name} (Loop) rate {rate} at {by:?}"),
+                    &bvh,
+                    mesh.diagonal(),
+                    300_000,
+                );
+                rays += cast;
+                cases += (cast > 0) as usize;
+            }
+        }
+    }
+    eprintln!("Loop: {cases} cases, {rays} rays, 0 misses");
+    assert!(cases >= 100, "only {cases} cases");
 }

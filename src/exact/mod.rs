@@ -246,6 +246,12 @@ impl ExactTracer {
     /// `mesh` and `options` are the control mesh and rules the table was built from (for the
     /// diagonal and the infinitely sharp features).
     pub fn new(table: Arc<PatchTable>, mesh: &ControlMesh) -> Result<ExactTracer> {
+        if table.loop_surface().is_some() {
+            return Err(crate::error::Error::new(
+                crate::error::ErrorKind::Usage,
+                "the reference intersector (--exact) does not support the Loop scheme yet",
+            ));
+        }
         use rayon::prelude::*;
         let roots: Vec<Piece> = (0..table.patches.len())
             .into_par_iter()

@@ -29,6 +29,7 @@ use crate::refine::crease;
 use crate::refine::loop_rules::stationary_limit_mask;
 use crate::refine::loop_step::child_uv;
 use crate::refine::Level;
+use std::sync::OnceLock;
 
 /// Deepest descent towards an irregular vertex.
 pub const MAX_DEPTH: usize = 60;
@@ -36,13 +37,30 @@ pub const MAX_DEPTH: usize = 60;
 /// Levels a dart's limit position is refined for at most.
 const DART_LEVELS: usize = 200;
 
-/// A Loop control mesh ready to be evaluated.
+/// Levels of each face's tree built ahead: below, an irregular corner is refined on demand.
+pub const TREE_DEPTH: usize = 4;
+
+/// A node of a face's tree: the triangle is a regular patch, or split into its four children,
+/// or (at [`TREE_DEPTH`], next to an irregular vertex) its cut-out, refined on demand.
+#[derive(Clone, Debug)]
+enum Node {
+    Regular(Box<[[f64; 3]; 12]>),
+    Split(Box<[Node; 4]>),
+    Cap(Box<LocalMesh>),
+    Hole,
+}
+
+/// A Loop control mesh ready to be evaluated: for each face, a tree of regular box-spline
+/// patches down to [`TREE_DEPTH`] levels, with the cut-outs at irregular vertices kept for
+/// on-demand refinement.
 #[derive(Clone, Debug)]
 pub struct LoopSurface {
     level: Level,
     /// Control positions, three numbers per vertex.
     positions: Vec<f64>,
     method: CreaseMethod,
+    /// Each face's tree, built when the face is first evaluated.
+    trees: Vec<OnceLock<Node>>,
 }
 
 impl LoopSurface {
@@ -55,11 +73,89 @@ impl LoopSurface {
             ));
         }
         let (level, _) = Level::base(mesh, &options)?;
-        Ok(LoopSurface {
+        let mut surface = LoopSurface {
             level,
-            positions: mesh.positions.as_flattened().to_vec(),
+            positions: Vec::new(),
             method: options.crease_method,
+            trees: Vec::new(),
+        };
+        surface.set_positions(&mesh.positions)?;
+        Ok(surface)
+    }
+
+    /// Re-poses the surface: new control positions (one per control vertex), same topology
+    /// and tags; the trees are rebuilt.
+    pub fn set_positions(&mut self, base: &[[f64; 3]]) -> Result<()> {
+        if base.len() != self.level.num_vertices() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "{} positions for {} control vertices",
+                    base.len(),
+                    self.level.num_vertices()
+                ),
+            ));
+        }
+        self.positions = base.as_flattened().to_vec();
+        self.trees = (0..self.level.num_faces())
+            .map(|_| OnceLock::new())
+            .collect();
+        Ok(())
+    }
+
+    /// The tree of face `f`, built on first use.
+    fn tree(&self, f: usize) -> &Node {
+        self.trees[f].get_or_init(|| {
+            if self.level.face_hole[f] {
+                return Node::Hole;
+            }
+            let local = LocalMesh::extract(&self.level, &self.positions, 3, f, 2);
+            self.build_node(local, 0)
         })
+    }
+
+    fn build_node(&self, local: LocalMesh, depth: usize) -> Node {
+        if let Some(cps) = loop_box::gather(&local.level, 0) {
+            return Node::Regular(Box::new(cps.map(|p| p.position(|i| point(&local, i)))));
+        }
+        if depth == TREE_DEPTH {
+            return Node::Cap(Box::new(local));
+        }
+        let refined = local.refine(self.method);
+        let kids: [Node; 4] = std::array::from_fn(|k| {
+            // A regular child is read off the refined cut-out directly.
+            if let Some(cps) = loop_box::gather(&refined.level, k) {
+                return Node::Regular(Box::new(cps.map(|p| p.position(|i| point(&refined, i)))));
+            }
+            let cut = LocalMesh::extract(&refined.level, &refined.data, 3, k, 2);
+            self.build_node(cut, depth + 1)
+        });
+        Node::Split(Box::new(kids))
+    }
+
+    /// Bytes held by the trees built so far (control points and cut-outs' data; not their
+    /// topology).
+    pub fn bytes(&self) -> usize {
+        fn node_bytes(n: &Node) -> usize {
+            std::mem::size_of::<Node>()
+                + match n {
+                    Node::Regular(_) => 12 * 24,
+                    Node::Split(k) => k.iter().map(node_bytes).sum(),
+                    Node::Cap(l) => l.data.len() * 8 + 64 * l.level.num_faces(),
+                    Node::Hole => 0,
+                }
+        }
+        self.trees
+            .iter()
+            .filter_map(|t| t.get())
+            .map(node_bytes)
+            .sum::<usize>()
+            + self.positions.len() * 8
+    }
+
+    /// True when face `f` is a hole.
+    pub fn is_hole(&self, f: usize) -> bool {
+        self.level.face_hole[f]
     }
 
     /// Number of faces (each one triangle, one parameter domain).
@@ -91,11 +187,104 @@ impl LoopSurface {
                 "({u}, {v}) is outside the triangle u, v ≥ 0, u + v ≤ 1"
             ));
         }
-        if self.level.face_hole[f] {
-            return bad(format!("face {} is a hole", at.face));
+        // The tree: regular leaves directly, caps by on-demand descent.
+        let (mut u, mut v) = (u.max(0.0), v.max(0.0));
+        let mut node = self.tree(f);
+        let mut scale = 1.0f64;
+        let mut depth = 0;
+        loop {
+            match node {
+                Node::Hole => return bad(format!("face {} is a hole", at.face)),
+                Node::Regular(cps) => return Ok(sample(loop_box::eval(cps, u, v), scale, depth)),
+                Node::Cap(local) => {
+                    let mut s = self.descend((**local).clone(), u, v, true);
+                    s.du = s.du.map(|x| x * scale);
+                    s.dv = s.dv.map(|x| x * scale);
+                    let s2 = scale * scale;
+                    s.duu = s.duu.map(|x| x * s2);
+                    s.duv = s.duv.map(|x| x * s2);
+                    s.dvv = s.dvv.map(|x| x * s2);
+                    s.level = (s.level as usize + depth).min(255) as u8;
+                    return Ok(s);
+                }
+                Node::Split(kids) => {
+                    let (k, s, t) = child_of(u, v);
+                    scale *= if k == 3 { -2.0 } else { 2.0 };
+                    node = &kids[k];
+                    (u, v) = (s, t);
+                    depth += 1;
+                }
+            }
         }
-        let local = LocalMesh::extract(&self.level, &self.positions, 3, f, 2);
-        Ok(self.descend(local, u, v, true))
+    }
+
+    /// The sub-quad parameter `(k, s, t)` of triangle face (Catmull-Clark's sub-face
+    /// convention for a three-sided face: quad `k` runs from the face's vertex `k` (0,0) to the
+    /// midpoint of edge `k` (1,0), the centroid (1,1) and the midpoint of edge `k − 1` (0,1))
+    /// as the triangle's `(u, v)`, with `∂(u,v)/∂s`, `∂(u,v)/∂t` and the cross derivative
+    /// (the map is bilinear).
+    pub fn sub_quad_uv(k: usize, s: f64, t: f64) -> ([f64; 2], [[f64; 2]; 3]) {
+        let corner = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let c = corner[k % 3];
+        let next = corner[(k + 1) % 3];
+        let prev = corner[(k + 2) % 3];
+        let mk = [0.5 * (c[0] + next[0]), 0.5 * (c[1] + next[1])];
+        let mp = [0.5 * (c[0] + prev[0]), 0.5 * (c[1] + prev[1])];
+        let g = [1.0 / 3.0, 1.0 / 3.0];
+        let f = |i: usize| {
+            (1.0 - s) * (1.0 - t) * c[i]
+                + s * (1.0 - t) * mk[i]
+                + s * t * g[i]
+                + (1.0 - s) * t * mp[i]
+        };
+        let ds = |i: usize| (1.0 - t) * (mk[i] - c[i]) + t * (g[i] - mp[i]);
+        let dt = |i: usize| (1.0 - s) * (mp[i] - c[i]) + s * (g[i] - mk[i]);
+        let dst = |i: usize| c[i] - mk[i] + g[i] - mp[i];
+        (
+            [f(0), f(1)],
+            [[ds(0), ds(1)], [dt(0), dt(1)], [dst(0), dst(1)]],
+        )
+    }
+
+    /// [`Self::eval`] at the sub-quad parameter `(face, k, s, t)` ([`Self::sub_quad_uv`]),
+    /// derivatives with respect to `(s, t)`: how a triangle is diced, as three quads.
+    pub fn eval_sub_quad(&self, at: FaceCoord) -> Result<Sample> {
+        if at.k > 2 {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "face {}: a triangle has sub-quads 0..=2, not {}",
+                    at.face, at.k
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&at.u) || !(0.0..=1.0).contains(&at.v) {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("(u, v) = ({}, {}) is outside [0, 1]²", at.u, at.v),
+            ));
+        }
+        let ([u, v], [ds, dt, dst]) = Self::sub_quad_uv(at.k as usize, at.u, at.v);
+        let r = self.eval(FaceCoord::new(at.face, 0, u.min(1.0 - v), v))?;
+        let lin = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| [0, 1, 2].map(|i| a[i] * x + b[i] * y);
+        let quad = |x: [f64; 2], y: [f64; 2]| {
+            [0, 1, 2].map(|i| {
+                r.duu[i] * x[0] * y[0]
+                    + r.duv[i] * (x[0] * y[1] + x[1] * y[0])
+                    + r.dvv[i] * x[1] * y[1]
+            })
+        };
+        let cross = lin(r.du, r.dv, dst[0], dst[1]);
+        let st = quad(ds, dt);
+        Ok(Sample {
+            p: r.p,
+            du: lin(r.du, r.dv, ds[0], ds[1]),
+            dv: lin(r.du, r.dv, dt[0], dt[1]),
+            duu: quad(ds, ds),
+            duv: [0, 1, 2].map(|i| st[i] + cross[i]),
+            dvv: quad(dt, dt),
+            level: r.level + 1,
+        })
     }
 
     /// Evaluates at `(u, v)` of face 0 of `local`; `derivatives: false` skips the secants at

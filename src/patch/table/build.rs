@@ -11,6 +11,7 @@ use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
 use crate::patch::local::{child_face, extract_faces};
 use crate::patch::regular::{classify, RegularKind};
 use crate::patch::stam;
+use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
 use crate::refine::step;
 use crate::refine::Level;
@@ -207,16 +208,6 @@ impl PatchTable {
             ));
         }
         let (base, _) = Level::base(mesh, &options)?;
-        if options.scheme != Scheme::Catmark {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                format!(
-                    "the {} scheme has no patch table yet, so it cannot be diced, traced or \
-                     rendered: `limitray refine` and `limitray eval` (`LoopSurface`) support it",
-                    options.scheme.name()
-                ),
-            ));
-        }
         let method = options.crease_method;
         let opts = PatchOptions {
             single_crease: opts.single_crease && method == CreaseMethod::Uniform,
@@ -241,7 +232,15 @@ impl PatchTable {
             mesh_options: options,
             options: opts,
             stats: PatchStats::default(),
+            loop_surface: None,
         };
+        if options.scheme == Scheme::Loop {
+            // A Loop mesh's surface is its own evaluator; each triangle is three sub-quads
+            // (the domains of dicing), as a Catmull-Clark triangle's sub-faces are.
+            table.loop_surface = Some(std::sync::Arc::new(LoopSurface::new(mesh, options)?));
+            table.root_offsets = (0..=base.num_faces() as u32).map(|f| 3 * f).collect();
+            return Ok(table);
+        }
         let mut pending: Vec<(u32, Slot)> = Vec::new();
         for f in 0..base.num_faces() {
             let n = base.topo.face_size(f);
@@ -321,6 +320,12 @@ impl PatchTable {
 
     /// Re-poses the table: new control positions, same topology.
     pub fn set_positions(&mut self, base: &[[f64; 3]]) {
+        if let Some(surface) = &mut self.loop_surface {
+            if let Err(e) = std::sync::Arc::make_mut(surface).set_positions(base) {
+                panic!("PatchTable::set_positions: {e}");
+            }
+            return;
+        }
         let mut all: Vec<[f64; 3]> = base.to_vec();
         let mut start = 0;
         for (select, t) in &self.chain {

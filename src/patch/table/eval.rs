@@ -11,6 +11,9 @@ use crate::patch::single_crease;
 impl PatchTable {
     /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
     pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        if let Some(surface) = &self.loop_surface {
+            return surface.eval_sub_quad(at);
+        }
         let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
         if face >= self.num_faces() {
             return Err(Error::new(
@@ -78,7 +81,8 @@ impl PatchTable {
     /// their evaluation went).
     pub fn level_at(&self, at: FaceCoord) -> Result<u8> {
         let (face, k) = (at.face as usize, at.k as usize);
-        if face < self.num_faces()
+        if self.loop_surface.is_none()
+            && face < self.num_faces()
             && k < self.sub_faces(face)
             && (0.0..=1.0).contains(&at.u)
             && (0.0..=1.0).contains(&at.v)
@@ -113,7 +117,7 @@ impl PatchTable {
     /// The level [`Self::level_at`] gives everywhere in domain `(face, k)` when the whole
     /// domain is one B-spline or single-crease patch; `None` otherwise (or out of range).
     pub fn domain_level(&self, face: usize, k: usize) -> Option<u8> {
-        if face >= self.num_faces() || k >= self.sub_faces(face) {
+        if self.loop_surface.is_some() || face >= self.num_faces() || k >= self.sub_faces(face) {
             return None;
         }
         match self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize] {

@@ -170,6 +170,9 @@ pub struct PatchTable {
     pub options: PatchOptions,
     /// Build statistics.
     pub stats: PatchStats,
+    /// Under the Loop scheme the surface's evaluator (and `patches` is empty): `eval` at
+    /// `(face, k, u, v)` is [`LoopSurface::eval_sub_quad`].
+    loop_surface: Option<std::sync::Arc<crate::patch::LoopSurface>>,
 }
 
 /// A limit-surface sample.
@@ -216,7 +219,8 @@ impl PatchTable {
                     + points
             })
             .sum();
-        self.point_stencils.bytes()
+        self.loop_surface.as_ref().map_or(0, |s| s.bytes())
+            + self.point_stencils.bytes()
             + self
                 .chain
                 .iter()
@@ -231,7 +235,13 @@ impl PatchTable {
             + topo_bytes
     }
 
-    /// Number of sub-faces of base face `f` (1 for a quad, n for an n-gon).
+    /// The Loop evaluator when the table's mesh is subdivided with the Loop scheme.
+    pub fn loop_surface(&self) -> Option<&crate::patch::LoopSurface> {
+        self.loop_surface.as_deref()
+    }
+
+    /// Number of sub-faces of base face `f` (1 for a quad, n for an n-gon; 3 for a Loop
+    /// triangle).
     pub fn sub_faces(&self, f: usize) -> usize {
         (self.root_offsets[f + 1] - self.root_offsets[f]) as usize
     }
