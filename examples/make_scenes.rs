@@ -7,6 +7,8 @@
 //! - `meshes/blob.obj`: a lobed geodesic blob (many valence-3, -5 and -6 vertices);
 //! - `meshes/gear12.obj`, `meshes/gear8.obj`: spur gears with many semi-sharp creases;
 //! - `meshes/cyclorama.obj`: a floor sweeping up into a back wall;
+//! - `meshes/gear8_tri.obj`, `meshes/rounded_box_s2_tri.obj`: the 8-tooth gear and the
+//!   sharpness-2 box cut into triangles (creases kept), for the Loop scene;
 //! - `studio.exr`: a 256×128 lat-long studio environment (dim gradient, two soft boxes).
 
 use limitray::mesh::shapes;
@@ -92,6 +94,18 @@ fn main() {
         "gear8.obj",
         &shapes::gear(8),
         "Spur gear, 8 teeth, semi-sharp creases.",
+    );
+    write(
+        &meshes,
+        "gear8_tri.obj",
+        &shapes::triangulated(&shapes::gear(8)),
+        "Spur gear, 8 teeth, semi-sharp creases, triangulated (for the Loop scheme).",
+    );
+    write(
+        &meshes,
+        "rounded_box_s2_tri.obj",
+        &shapes::triangulated(&shapes::rounded_box(2.0)),
+        "Rounded box, sharpness 2, triangulated (for the Loop scheme).",
     );
     write(
         &meshes,

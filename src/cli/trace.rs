@@ -8,7 +8,8 @@ use crate::bvh::{Ray, Ray64};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::{ExactTrace, ExactTracer};
 use crate::grid::GridMesh;
-use crate::patch::PatchTable;
+use crate::mesh::Scheme;
+use crate::patch::{LoopSurface, PatchTable};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
@@ -68,11 +69,13 @@ pub fn run(args: &TraceCmd) -> Result<()> {
         let tracer = ExactTracer::new(std::sync::Arc::new(table), &m)?;
         return trace_exact(&tracer, input, output);
     }
-    let (_table, d) = dice_mesh(&m, args.rules.options(&m), &args.dice)?;
+    let options = args.rules.options(&m);
+    let scheme = options.scheme;
+    let (_table, d) = dice_mesh(&m, options, &args.dice)?;
     let bvh = GridMesh::build(&d)?;
     drop(d);
     match args.backend.backend {
-        Backend::Cpu => trace(&bvh, input, output),
+        Backend::Cpu => trace_scheme(&bvh, scheme, input, output),
         #[cfg(feature = "gpu")]
         Backend::Gpu => {
             let ctx = crate::gpu::GpuContext::new(args.backend.adapter.as_deref())?;
@@ -84,7 +87,10 @@ pub fn run(args: &TraceCmd) -> Result<()> {
                     &f32_rays,
                     crate::gpu::TraceOptions::default(),
                 )?;
-                Ok(hits.iter().map(|h| diced_line(h.as_ref())).collect())
+                Ok(hits
+                    .iter()
+                    .map(|h| diced_line(h.as_ref(), scheme))
+                    .collect())
             })
         }
         #[cfg(not(feature = "gpu"))]
@@ -138,9 +144,17 @@ fn parse_ray(line: &str, exact: bool) -> std::result::Result<(Ray, Ray64), Strin
 }
 
 /// The output line of a diced hit or miss.
-fn diced_line(h: Option<&crate::bvh::Hit>) -> String {
+fn diced_line(h: Option<&crate::bvh::Hit>, scheme: Scheme) -> String {
     match h {
         None => "miss".into(),
+        Some(h) if scheme == Scheme::Loop => {
+            // A Loop triangle is diced as three sub-quads: report the triangle's own (u, v).
+            let ([u, v], _) = LoopSurface::sub_quad_uv(h.k as usize, h.u as f64, h.v as f64);
+            format!(
+                "hit {:?} {} 0 {:?} {:?} {:?} {:?} {:?}",
+                h.t, h.face, u, v, h.ns[0], h.ns[1], h.ns[2]
+            )
+        }
         Some(h) => format!(
             "hit {:?} {} {} {:?} {:?} {:?} {:?} {:?}",
             h.t, h.face, h.k, h.u, h.v, h.ns[0], h.ns[1], h.ns[2]
@@ -179,12 +193,23 @@ pub fn exact_line(x: &ExactTrace) -> String {
 /// Input is read and answered in batches of [`TRACE_BATCH`] lines, so memory does not grow
 /// with the input.
 pub fn trace(bvh: &GridMesh, input: impl BufRead, output: impl Write) -> Result<()> {
+    trace_scheme(bvh, Scheme::Catmark, input, output)
+}
+
+/// [`trace`] of a mesh subdivided with `scheme`: under Loop, hits report the triangle's
+/// `(u, v)` (and `k` = 0) instead of its sub-quad's.
+pub fn trace_scheme(
+    bvh: &GridMesh,
+    scheme: Scheme,
+    input: impl BufRead,
+    output: impl Write,
+) -> Result<()> {
     trace_with(input, output, |rays| {
         let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
         Ok(bvh
             .intersect_batch(&f32_rays)
             .iter()
-            .map(|h| diced_line(h.as_ref()))
+            .map(|h| diced_line(h.as_ref(), scheme))
             .collect())
     })
 }

@@ -143,6 +143,30 @@ fn icosphere(level: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
     (p, tris)
 }
 
+/// `m` with every face of more than three vertices cut into a fan of triangles from its first
+/// vertex (quads along their diagonal 0–2), for the Loop scheme; positions, creases and
+/// corners are kept (every original edge is still an edge), holes and options too.
+pub fn triangulated(m: &ControlMesh) -> ControlMesh {
+    let mut out = m.clone();
+    out.face_offsets = vec![0];
+    out.face_verts.clear();
+    out.face_uvs.clear();
+    out.holes.clear();
+    out.provenance = Default::default();
+    for f in 0..m.num_faces() {
+        let fv = &m.face_verts[m.face_offsets[f] as usize..m.face_offsets[f + 1] as usize];
+        let hole = m.holes.contains(&(f as u32));
+        for i in 1..fv.len() - 1 {
+            if hole {
+                out.holes.push(out.num_faces() as u32);
+            }
+            out.face_verts.extend_from_slice(&[fv[0], fv[i], fv[i + 1]]);
+            out.face_offsets.push(out.face_verts.len() as u32);
+        }
+    }
+    out
+}
+
 /// A smooth organic blob: a geodesic sphere (12 valence-5 and many valence-6 vertices; as a
 /// Catmull-Clark control mesh of triangles each face also gets a valence-3 centre) pulled
 /// out into five rounded lobes of different lengths and gently rippled. No tags.

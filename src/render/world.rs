@@ -253,18 +253,22 @@ impl World {
         stats.load_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        let mut table_keys: Vec<(usize, usize)> = Vec::new();
+        let mut table_keys: Vec<(usize, usize, crate::mesh::Scheme)> = Vec::new();
         let table_of: Vec<usize> = desc
             .meshes
             .iter()
             .zip(&file_of)
-            .map(|(m, &f)| index_of(&mut table_keys, (f, m.max_level)))
+            .map(|(m, &f)| index_of(&mut table_keys, (f, m.max_level, m.scheme)))
             .collect();
         let tables = table_keys
             .par_iter()
-            .map(|&(f, max_level)| {
-                PatchTable::new(
+            .map(|&(f, max_level, scheme)| {
+                PatchTable::with_options(
                     &controls[f],
+                    crate::mesh::Options {
+                        scheme,
+                        ..controls[f].options
+                    },
                     PatchOptions {
                         max_level,
                         ..PatchOptions::default()

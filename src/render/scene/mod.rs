@@ -99,6 +99,8 @@ pub struct MeshDesc {
     pub max_level: usize,
     /// Upper bound on the segments of one edge.
     pub max_rate: u32,
+    /// Subdivision scheme (`scheme = "catmark"` or `"loop"`; Catmull-Clark by default).
+    pub scheme: crate::mesh::Scheme,
     /// Line of the entry in the scene file, for messages.
     pub line: usize,
 }
@@ -328,6 +330,19 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             }
             None => 128,
         };
+        let scheme = match &r.scheme {
+            None => crate::mesh::Scheme::Catmark,
+            Some(s) => match s.get_ref().as_str() {
+                "catmark" => crate::mesh::Scheme::Catmark,
+                "loop" => crate::mesh::Scheme::Loop,
+                other => {
+                    return Err(src.err(
+                        s.span(),
+                        format!("unknown scheme '{other}' (catmark or loop)"),
+                    ))
+                }
+            },
+        };
         meshes.push(MeshDesc {
             file: base.join(r.file.get_ref()),
             material,
@@ -335,6 +350,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             dicing,
             max_level,
             max_rate,
+            scheme,
             line: src.line_of(m.span().start),
         });
     }

@@ -124,6 +124,7 @@ pub(super) struct RawMesh {
     pub(super) pixels_per_edge: Option<Spanned<f64>>,
     pub(super) max_level: Option<Spanned<i64>>,
     pub(super) max_rate: Option<Spanned<i64>>,
+    pub(super) scheme: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
