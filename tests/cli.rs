@@ -580,20 +580,48 @@ fn refine_with_the_loop_scheme() {
     assert!(lines[1].starts_with("nan"), "{text}");
     assert!(stderr(&o).contains("stdin:2:"), "{}", stderr(&o));
 
-    // Dicing and tracing are not there yet: refused with a clear message, nothing written.
-    let o = limitray(&[&"dice", &tetra, &"--scheme", &"loop", &"-o", &out]);
-    let err = assert_exit_2(&o, "dice --scheme loop");
-    assert!(err.contains("Loop") || err.contains("loop"), "{err}");
-    assert!(!out.exists());
+    // `refine --limit`: level 1's vertex 0 is the child of control vertex 0, at the same
+    // limit (1/5, 1/5, 1/5); every vertex lies on the surface.
+    let text = refine_to_file(
+        &dir,
+        &tetra,
+        "tetra_limit.obj",
+        &["--scheme", "loop", "--limit"],
+    );
+    let p = points_of(&text);
+    assert_eq!(p.len(), 10);
+    for c in p[0] {
+        assert!((c - 0.2).abs() < 1e-14, "{:?}", p[0]);
+    }
+
+    // `dice`: each triangle as three sub-quads, rate 4 → 3 · (2 · 2²) = 24 triangles per
+    // face; every diced vertex is a limit point, so the four corner limits appear.
+    let diced = dir.path("tetra_diced.obj");
     let o = limitray(&[
-        &"refine",
+        &"dice",
         &tetra,
         &"--scheme",
         &"loop",
-        &"--limit",
+        &"--rate",
+        &"4",
         &"-o",
-        &out,
+        &diced,
     ]);
-    assert_exit_2(&o, "refine --limit --scheme loop");
-    assert!(!out.exists());
+    assert_success(&o, "dice --scheme loop");
+    let text = std::fs::read_to_string(&diced).unwrap();
+    assert_eq!(count_v_f(&text).1, 4 * 24);
+    let p = points_of(&text);
+    assert!(p.iter().any(|q| q.iter().all(|c| (c - 0.2).abs() < 1e-6)));
+
+    // The reference intersector does not take Loop yet: refused, clearly.
+    let args: Vec<std::ffi::OsString> = vec![
+        "trace".into(),
+        tetra.clone().into(),
+        "--scheme".into(),
+        "loop".into(),
+        "--exact".into(),
+    ];
+    let o = common::run_limitray(&args, Some(b"0 0 0 1 0 0\n"));
+    let err = assert_exit_2(&o, "trace --exact --scheme loop");
+    assert!(err.contains("Loop"), "{err}");
 }

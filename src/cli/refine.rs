@@ -3,6 +3,8 @@
 use super::args::{finish_output, load, open_output, RuleArgs};
 use crate::error::Result;
 use crate::mesh::obj::write_obj;
+use crate::mesh::Scheme;
+use crate::patch::LoopSurface;
 use crate::refine::Refiner;
 use std::path::PathBuf;
 
@@ -30,12 +32,6 @@ pub fn run(args: &RefineCmd) -> Result<()> {
     let out = open_output(&args.output)?;
     let m = load(&args.mesh)?;
     let opts = args.rules.options(&m);
-    if args.limit && opts.scheme != crate::mesh::Scheme::Catmark {
-        return Err(crate::error::Error::new(
-            crate::error::ErrorKind::Usage,
-            "--limit is not available for the Loop scheme yet",
-        ));
-    }
     let level = args.level;
     let r = Refiner::with_options(&m, opts, level)?;
     for w in &r.warnings {
@@ -44,7 +40,10 @@ pub fn run(args: &RefineCmd) -> Result<()> {
     let mut pos = r.refine_positions(&m.positions, level);
     let lvl = &r.levels[level];
     if args.limit {
-        pos = crate::refine::limit::limit_positions(lvl, &pos, opts.crease_method);
+        pos = match opts.scheme {
+            Scheme::Catmark => crate::refine::limit::limit_positions(lvl, &pos, opts.crease_method),
+            Scheme::Loop => LoopSurface::new(&m, opts)?.limit_positions(lvl, level, &pos)?,
+        };
     }
     let mut offsets = vec![0u32];
     let mut verts = Vec::new();

@@ -153,6 +153,43 @@ impl LoopSurface {
             + self.positions.len() * 8
     }
 
+    /// Exact limit positions of the vertices of `level`, refinement level `depth` of this
+    /// surface's control mesh (as [`crate::refine::Refiner`] builds it; `refined` its
+    /// positions): each vertex is evaluated at its place in a base face's triangle parameter.
+    /// A vertex that only hole faces use keeps its refined position (it is not on the surface).
+    pub fn limit_positions(
+        &self,
+        level: &Level,
+        depth: usize,
+        refined: &[[f64; 3]],
+    ) -> Result<Vec<[f64; 3]>> {
+        use rayon::prelude::*;
+        let topo = &level.topo;
+        (0..level.num_vertices())
+            .into_par_iter()
+            .map(|x| {
+                let faces = topo.vertex_faces(x);
+                let Some(&f) = faces
+                    .iter()
+                    .find(|&&f| !self.level.face_hole[f as usize >> (2 * depth)])
+                else {
+                    return Ok(refined[x]);
+                };
+                let c = topo
+                    .face_vertices(f as usize)
+                    .iter()
+                    .position(|&v| v as usize == x)
+                    .expect("a face of the vertex holds it");
+                let (mut u, mut v) = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][c];
+                for l in 0..depth {
+                    (u, v) = child_uv((f as usize >> (2 * l)) & 3, u, v);
+                }
+                let base = (f as usize >> (2 * depth)) as u32;
+                Ok(self.eval(FaceCoord::new(base, 0, u, v))?.p)
+            })
+            .collect()
+    }
+
     /// True when face `f` is a hole.
     pub fn is_hole(&self, f: usize) -> bool {
         self.level.face_hole[f]
