@@ -193,7 +193,8 @@ fn corpus_closed_shapes_do_not_leak() {
     assert!(cases >= 200, "only {cases} cases");
 }
 
-/// The Loop scheme (issue 15): every closed loop shape of the corpus under `Scheme::Loop`,
+/// The Loop scheme (issue 15): every closed loop shape of the corpus and the meshes of the
+/// bundled Loop scene under `Scheme::Loop`,
 /// each triangle diced as three sub-quads sharing its edges and spokes, at rates 1–64, at the
 /// origin and far from it, 300k random rays per case plus the aimed ones.
 #[test]
@@ -203,7 +204,11 @@ fn corpus_closed_loop_shapes_do_not_leak() {
     };
     let mut cases = 0;
     let mut rays = 0usize;
-    for path in common::corpus_files(&models, "loop_") {
+    // The corpus's loop shapes and the bundled Loop scene's meshes (scenes/loop.toml).
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes");
+    let mut files = common::corpus_files(&models, "loop_");
+    files.extend(["blob.obj", "gear8_tri.obj", "rounded_box_s2_tri.obj"].map(|f| scene.join(f)));
+    for path in files {
         let Ok(mut mesh) = read_obj(&path) else {
             continue;
         };
