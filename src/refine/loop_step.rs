@@ -16,7 +16,7 @@ use super::crease;
 use super::level::Level;
 use super::loop_rules::{edge_mask, vertex_mask};
 use super::stencil::StencilTable;
-use super::step::{edge_halves, half_edge, parallel_rows, vertex_rows};
+use super::step::{child_tags, edge_halves, half_edge, parallel_rows, vertex_rows};
 use crate::mesh::{CreaseMethod, Topology};
 
 /// Index of the child of parent vertex `v`.
@@ -106,15 +106,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
         Topology::from_edges(nv + ne, face_offsets, face_verts, face_edges, edge_verts);
 
     let halves = edge_halves(parent, method);
-    let mut edge_sharpness = vec![0.0f32; child_topo.num_edges()];
-    for e in 0..ne {
-        edge_sharpness[2 * e] = halves[e][0];
-        edge_sharpness[2 * e + 1] = halves[e][1];
-    }
-    let mut vertex_sharpness = vec![0.0f32; child_topo.num_vertices];
-    for v in 0..nv {
-        vertex_sharpness[v] = crease::decrement(parent.vertex_sharpness[v]);
-    }
+    let (edge_sharpness, vertex_sharpness) = child_tags(parent, &halves, &child_topo);
 
     let mut table = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
     let edge_rows = parallel_rows(ne, nv, |e, acc| {

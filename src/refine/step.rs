@@ -77,6 +77,27 @@ pub(super) fn half_edge(topo: &Topology, e: u32, v: u32, lead: bool) -> u32 {
     2 * e + if a == b { !lead } else { a != v } as u32
 }
 
+/// The child level's edge and vertex sharpness, for children numbered as both schemes number
+/// them: parent edge `e`'s halves are child edges `2e` and `2e + 1` (sharpness from `halves`,
+/// every other child edge smooth), parent vertex `v`'s child is vertex `v` (its sharpness
+/// decremented, every other child vertex smooth).
+pub(super) fn child_tags(
+    parent: &Level,
+    halves: &[[f32; 2]],
+    child: &Topology,
+) -> (Vec<f32>, Vec<f32>) {
+    let mut edge_sharpness = vec![0.0f32; child.num_edges()];
+    for (e, h) in halves.iter().enumerate() {
+        edge_sharpness[2 * e] = h[0];
+        edge_sharpness[2 * e + 1] = h[1];
+    }
+    let mut vertex_sharpness = vec![0.0f32; child.num_vertices];
+    for (c, &s) in vertex_sharpness.iter_mut().zip(&parent.vertex_sharpness) {
+        *c = crease::decrement(s);
+    }
+    (edge_sharpness, vertex_sharpness)
+}
+
 /// Child sharpness of each parent edge at each end: `[at v0, at v1]`.
 pub(super) fn edge_halves(parent: &Level, method: CreaseMethod) -> Vec<[f32; 2]> {
     let topo = &parent.topo;
@@ -215,15 +236,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
     );
 
     let halves = edge_halves(parent, method);
-    let mut edge_sharpness = vec![0.0f32; child_topo.num_edges()];
-    for e in 0..ne {
-        edge_sharpness[2 * e] = halves[e][0];
-        edge_sharpness[2 * e + 1] = halves[e][1];
-    }
-    let mut vertex_sharpness = vec![0.0f32; child_topo.num_vertices];
-    for v in 0..nv {
-        vertex_sharpness[v] = crease::decrement(parent.vertex_sharpness[v]);
-    }
+    let (edge_sharpness, vertex_sharpness) = child_tags(parent, &halves, &child_topo);
 
     // Stencils: vertex children, face points, edge points.
     let vertex_rows = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
