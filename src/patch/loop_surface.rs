@@ -27,7 +27,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
 use crate::refine::crease;
 use crate::refine::loop_rules::stationary_limit_mask;
-use crate::refine::loop_step::child_uv;
+use crate::refine::loop_step::{child_of, child_uv};
 use crate::refine::Level;
 use std::sync::OnceLock;
 
@@ -508,31 +508,6 @@ fn apply(mask: &[(u32, f64)], pos: impl Fn(u32) -> [f64; 3]) -> [f64; 3] {
         }
     }
     out
-}
-
-/// The child triangle holding `(u, v)` and the point's parameter in it (inverse of
-/// [`child_uv`]; every operation is exact).
-fn child_of(u: f64, v: f64) -> (usize, f64, f64) {
-    let k = if u >= 0.5 {
-        1
-    } else if v >= 0.5 {
-        2
-    } else if u + v <= 0.5 {
-        0
-    } else {
-        3
-    };
-    let (s, t) = match k {
-        0 => (2.0 * u, 2.0 * v),
-        1 => (2.0 * u - 1.0, 2.0 * v),
-        2 => (2.0 * u, 2.0 * v - 1.0),
-        _ => (1.0 - 2.0 * u, 1.0 - 2.0 * v),
-    };
-    debug_assert!({
-        let (pu, pv) = child_uv(k, s, t);
-        (pu - u).abs() < 1e-15 && (pv - v).abs() < 1e-15
-    });
-    (k, s.max(0.0), t.max(0.0))
 }
 
 /// A sample from `[p, du, dv, duu, duv, dvv]` in the current triangle's parameter, whose

@@ -42,6 +42,31 @@ pub fn child_uv(k: usize, s: f64, t: f64) -> (f64, f64) {
     }
 }
 
+/// The child triangle holding `(u, v)` and the point's parameter in it (inverse of
+/// [`child_uv`]; every operation is exact).
+pub fn child_of(u: f64, v: f64) -> (usize, f64, f64) {
+    let k = if u >= 0.5 {
+        1
+    } else if v >= 0.5 {
+        2
+    } else if u + v <= 0.5 {
+        0
+    } else {
+        3
+    };
+    let (s, t) = match k {
+        0 => (2.0 * u, 2.0 * v),
+        1 => (2.0 * u - 1.0, 2.0 * v),
+        2 => (2.0 * u, 2.0 * v - 1.0),
+        _ => (1.0 - 2.0 * u, 1.0 - 2.0 * v),
+    };
+    debug_assert!({
+        let (pu, pv) = child_uv(k, s, t);
+        (pu - u).abs() < 1e-15 && (pv - v).abs() < 1e-15
+    });
+    (k, s.max(0.0), t.max(0.0))
+}
+
 /// The vertex of triangle `f` opposite its edge `e`.
 fn opposite(topo: &Topology, f: usize, e: u32) -> u32 {
     let fe = topo.face_edge_list(f);
