@@ -5,7 +5,7 @@
 //! vertices, or regular crease vertices with phantoms) is a box-spline patch evaluated
 //! directly. Any other triangle is cut out of its level with two rings of faces
 //! ([`LocalMesh`]), refined once with the library's Loop rules, and the evaluation descends
-//! into the child triangle that holds the point ([`loop_step::child_uv`]), until the triangle
+//! into the child triangle that holds the point ([`crate::refine::loop_step::child_uv`]), until the triangle
 //! is regular. A point that stays at an irregular vertex (an extraordinary vertex, a corner,
 //! a dart, a crease vertex of another valence) takes that vertex's exact limit position once
 //! its neighbourhood is stationary ([`stationary_limit_mask`]; a dart's by refining until the
