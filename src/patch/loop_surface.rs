@@ -286,42 +286,17 @@ impl LoopSurface {
     /// [`Self::eval`] at the sub-quad parameter `(face, k, s, t)` ([`Self::sub_quad_uv`]),
     /// derivatives with respect to `(s, t)`: how a triangle is diced, as three quads.
     pub fn eval_sub_quad(&self, at: FaceCoord) -> Result<Sample> {
-        if at.k > 2 {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                format!(
-                    "face {}: a triangle has sub-quads 0..=2, not {}",
-                    at.face, at.k
-                ),
-            ));
-        }
-        if !(0.0..=1.0).contains(&at.u) || !(0.0..=1.0).contains(&at.v) {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                format!("(u, v) = ({}, {}) is outside [0, 1]²", at.u, at.v),
-            ));
-        }
-        let ([u, v], [ds, dt, dst]) = Self::sub_quad_uv(at.k as usize, at.u, at.v);
-        let r = self.eval(FaceCoord::new(at.face, 0, u.min(1.0 - v), v))?;
-        let lin = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| [0, 1, 2].map(|i| a[i] * x + b[i] * y);
-        let quad = |x: [f64; 2], y: [f64; 2]| {
-            [0, 1, 2].map(|i| {
-                r.duu[i] * x[0] * y[0]
-                    + r.duv[i] * (x[0] * y[1] + x[1] * y[0])
-                    + r.dvv[i] * x[1] * y[1]
-            })
-        };
-        let cross = lin(r.du, r.dv, dst[0], dst[1]);
-        let st = quad(ds, dt);
-        Ok(Sample {
-            p: r.p,
-            du: lin(r.du, r.dv, ds[0], ds[1]),
-            dv: lin(r.du, r.dv, dt[0], dt[1]),
-            duu: quad(ds, ds),
-            duv: [0, 1, 2].map(|i| st[i] + cross[i]),
-            dvv: quad(dt, dt),
-            level: r.level + 1,
-        })
+        eval_sub_quad(at, |u, v| self.eval(FaceCoord::new(at.face, 0, u, v)))
+    }
+
+    /// The base level (control mesh topology and tags) the surface refines.
+    pub fn level(&self) -> &Level {
+        &self.level
+    }
+
+    /// Control position of vertex `v`.
+    pub fn control_point(&self, v: usize) -> [f64; 3] {
+        [0, 1, 2].map(|x| self.positions[3 * v + x])
     }
 
     /// Evaluates at `(u, v)` of face 0 of `local`; `derivatives: false` skips the secants at
@@ -492,6 +467,47 @@ impl LoopSurface {
         };
         sample([p, du, dv, [0.0; 3], [0.0; 3], [0.0; 3]], scale, depth)
     }
+}
+
+/// A triangle surface `eval(u, v)` (OpenSubdiv's triangle parameter) evaluated at the
+/// sub-quad parameter `(face, k, s, t)` of [`LoopSurface::sub_quad_uv`], derivatives with
+/// respect to `(s, t)` by the chain rule through the bilinear map: how every triangle
+/// surface (exact or approximate) is diced, as three quads.
+pub fn eval_sub_quad(at: FaceCoord, eval: impl Fn(f64, f64) -> Result<Sample>) -> Result<Sample> {
+    if at.k > 2 {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!(
+                "face {}: a triangle has sub-quads 0..=2, not {}",
+                at.face, at.k
+            ),
+        ));
+    }
+    if !(0.0..=1.0).contains(&at.u) || !(0.0..=1.0).contains(&at.v) {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!("(u, v) = ({}, {}) is outside [0, 1]²", at.u, at.v),
+        ));
+    }
+    let ([u, v], [ds, dt, dst]) = LoopSurface::sub_quad_uv(at.k as usize, at.u, at.v);
+    let r = eval(u.min(1.0 - v), v)?;
+    let lin = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| [0, 1, 2].map(|i| a[i] * x + b[i] * y);
+    let quad = |x: [f64; 2], y: [f64; 2]| {
+        [0, 1, 2].map(|i| {
+            r.duu[i] * x[0] * y[0] + r.duv[i] * (x[0] * y[1] + x[1] * y[0]) + r.dvv[i] * x[1] * y[1]
+        })
+    };
+    let cross = lin(r.du, r.dv, dst[0], dst[1]);
+    let st = quad(ds, dt);
+    Ok(Sample {
+        p: r.p,
+        du: lin(r.du, r.dv, ds[0], ds[1]),
+        dv: lin(r.du, r.dv, dt[0], dt[1]),
+        duu: quad(ds, ds),
+        duv: [0, 1, 2].map(|i| st[i] + cross[i]),
+        dvv: quad(dt, dt),
+        level: r.level + 1,
+    })
 }
 
 fn point(local: &LocalMesh, i: u32) -> [f64; 3] {

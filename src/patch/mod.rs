@@ -5,6 +5,7 @@
 //! extraordinary vertices are evaluated in constant time ([`stam`]); for the Loop scheme, the
 //! box-spline patch ([`loop_box`]) and exact on-demand evaluation ([`loop_surface`]).
 
+pub mod approx;
 pub mod bezier;
 pub mod bspline;
 pub mod local;

@@ -1,0 +1,172 @@
+//! Paper 002's approximations of the Loop limit surface — PN triangles, Walton–Meek and
+//! Gregory triangles — as alternative surfaces of a Loop mesh: one patch per triangle, built
+//! from the exact limit surface's positions, normals, tangents and cross tangents
+//! ([`construct`]) and evaluated as a triangular Gregory patch ([`gregory_tri`]).
+//!
+//! ```
+//! use limitray::mesh::{shapes, Options, Scheme};
+//! use limitray::patch::approx::{Approximation, TriApprox};
+//! use limitray::patch::LoopSurface;
+//! use limitray::FaceCoord;
+//!
+//! let mesh = shapes::blob();
+//! let exact = LoopSurface::new(&mesh, Options { scheme: Scheme::Loop, ..mesh.options })?;
+//! let pn = TriApprox::new(&exact, Approximation::Pn)?;
+//! // Corners interpolate the exact limit positions.
+//! let (a, b) = (pn.eval(FaceCoord::new(0, 0, 0.0, 0.0))?, exact.eval(FaceCoord::new(0, 0, 0.0, 0.0))?);
+//! assert!((0..3).all(|i| (a.p[i] - b.p[i]).abs() < 1e-12));
+//! # Ok::<(), limitray::Error>(())
+//! ```
+
+pub mod construct;
+pub mod gregory_tri;
+
+pub use gregory_tri::GregoryTri;
+
+use crate::coord::FaceCoord;
+use crate::error::{Error, ErrorKind, Result};
+use crate::patch::loop_surface::eval_sub_quad;
+use crate::patch::{LoopSurface, Sample};
+
+/// Which surface a mesh stands for: the exact limit surface or one of the approximations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Approximation {
+    /// The exact limit surface.
+    #[default]
+    Exact,
+    /// PN triangles (Vlachos et al. 2001) from the limit positions and normals: cubic, `C⁰`.
+    Pn,
+    /// Walton–Meek: `G¹` Gregory triangles from the PN boundary curves and normals alone.
+    Wm,
+    /// Paper 002's Gregory triangles: `G¹`, from limit tangents and cross tangents.
+    Gregory,
+}
+
+impl Approximation {
+    /// All four, in the order of the command line's list.
+    pub const ALL: [Approximation; 4] = [
+        Approximation::Exact,
+        Approximation::Pn,
+        Approximation::Wm,
+        Approximation::Gregory,
+    ];
+
+    /// The name used on the command line, in scenes and in JSON (`exact`, `pn`, `wm`,
+    /// `gregory`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Approximation::Exact => "exact",
+            Approximation::Pn => "pn",
+            Approximation::Wm => "wm",
+            Approximation::Gregory => "gregory",
+        }
+    }
+}
+
+impl std::fmt::Display for Approximation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Approximation {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Approximation::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| {
+                Error::new(
+                    ErrorKind::Usage,
+                    format!("unknown surface `{s}` (expected exact, pn, wm or gregory)"),
+                )
+            })
+    }
+}
+
+/// An approximate surface of a Loop mesh: one triangular Gregory patch per face.
+#[derive(Clone, Debug)]
+pub struct TriApprox {
+    kind: Approximation,
+    patches: Vec<Option<GregoryTri>>,
+}
+
+impl TriApprox {
+    /// The approximation `kind` of `exact` (an error for [`Approximation::Exact`]).
+    pub fn new(exact: &LoopSurface, kind: Approximation) -> Result<Self> {
+        if kind == Approximation::Exact {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "the exact surface is the LoopSurface itself, not an approximation",
+            ));
+        }
+        Ok(TriApprox {
+            kind,
+            patches: construct::build(exact, kind)?,
+        })
+    }
+
+    /// Which approximation this is.
+    pub fn kind(&self) -> Approximation {
+        self.kind
+    }
+
+    /// Number of faces.
+    pub fn num_faces(&self) -> usize {
+        self.patches.len()
+    }
+
+    /// Face `f`'s patch (`None` for a hole).
+    pub fn patch(&self, f: usize) -> Option<&GregoryTri> {
+        self.patches.get(f).and_then(|p| p.as_ref())
+    }
+
+    /// Bytes held: 15 points per face.
+    pub fn bytes(&self) -> usize {
+        self.patches.len() * std::mem::size_of::<Option<GregoryTri>>()
+    }
+
+    /// Position and derivatives at `(face, 0, u, v)` in OpenSubdiv's triangle parameter.
+    pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        let bad = |m: String| Err(Error::new(ErrorKind::Usage, m));
+        let f = at.face as usize;
+        if f >= self.patches.len() {
+            return bad(format!(
+                "face {} is out of range ({} faces)",
+                at.face,
+                self.patches.len()
+            ));
+        }
+        if at.k != 0 {
+            return bad(format!(
+                "face {}: a triangle has no sub-face {}",
+                at.face, at.k
+            ));
+        }
+        let (u, v) = (at.u, at.v);
+        if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-12) {
+            return bad(format!(
+                "({u}, {v}) is outside the triangle u, v ≥ 0, u + v ≤ 1"
+            ));
+        }
+        let Some(p) = &self.patches[f] else {
+            return bad(format!("face {} is a hole", at.face));
+        };
+        let r = p.eval(u, v.min(1.0 - u));
+        Ok(Sample {
+            p: r[0],
+            du: r[1],
+            dv: r[2],
+            duu: r[3],
+            duv: r[4],
+            dvv: r[5],
+            level: 0,
+        })
+    }
+
+    /// [`Self::eval`] at the sub-quad parameter `(face, k, s, t)` (as
+    /// [`LoopSurface::eval_sub_quad`]).
+    pub fn eval_sub_quad(&self, at: FaceCoord) -> Result<Sample> {
+        eval_sub_quad(at, |u, v| self.eval(FaceCoord::new(at.face, 0, u, v)))
+    }
+}
