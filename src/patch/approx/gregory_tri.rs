@@ -90,17 +90,13 @@ fn blend(i: usize, u: f64, v: f64) -> Jet {
 }
 
 impl GregoryTri {
-    /// The quartic net in [`bezier_indices`] order with interior point `i` as `(f⁻, f⁺)`.
-    fn net(&self) -> ([[f64; 3]; 15], [([f64; 3], [f64; 3]); 3]) {
+    /// The quartic net in [`bezier_indices`] order (the three interior points left zero: they
+    /// are blended at evaluation).
+    fn net(&self) -> [[f64; 3]; 15] {
         let (p, ep, em) = (&self.p, &self.e_plus, &self.e_minus);
         let q =
             |a: [f64; 3], b: [f64; 3], wa: f64| [0, 1, 2].map(|x| wa * a[x] + (1.0 - wa) * b[x]);
         let mut net = [[0.0; 3]; 15];
-        let inner = [
-            (self.f_minus[0], self.f_plus[0]),
-            (self.f_minus[1], self.f_plus[1]),
-            (self.f_minus[2], self.f_plus[2]),
-        ];
         for (n, &(i, j, k)) in bezier_indices().iter().enumerate() {
             net[n] = match (i, j, k) {
                 (4, 0, 0) => p[0],
@@ -122,14 +118,14 @@ impl GregoryTri {
                 _ => [0.0; 3],
             };
         }
-        (net, inner)
+        net
     }
 
     /// Position and derivatives at `(u, v)`: `[p, du, dv, duu, duv, dvv]`. Exact everywhere
     /// but at the three corners, where the interior blend has no second derivative (there it
     /// is frozen at its mean).
     pub fn eval(&self, u: f64, v: f64) -> [[f64; 3]; 6] {
-        let (net, inner) = self.net();
+        let net = self.net();
         let b = bernstein(u, v);
         let idx = bezier_indices();
         let mut out = [[0.0; 3]; 6];
@@ -149,7 +145,7 @@ impl GregoryTri {
                     }
                 }
                 Some(i) => {
-                    let (fm, fp) = inner[i];
+                    let (fm, fp) = (self.f_minus[i], self.f_plus[i]);
                     let a = blend(i, u, v);
                     let f = lerp(fm, fp, a[0]);
                     let df = [0, 1, 2].map(|x| fp[x] - fm[x]);
@@ -173,12 +169,11 @@ impl GregoryTri {
     /// The patch's points as one list (corners, `e⁺`, `e⁻`, `f⁺`, `f⁻`): what bounds it.
     pub fn points(&self) -> [[f64; 3]; 15] {
         let mut out = [[0.0; 3]; 15];
-        for i in 0..3 {
-            out[i] = self.p[i];
-            out[3 + i] = self.e_plus[i];
-            out[6 + i] = self.e_minus[i];
-            out[9 + i] = self.f_plus[i];
-            out[12 + i] = self.f_minus[i];
+        for (k, part) in [self.p, self.e_plus, self.e_minus, self.f_plus, self.f_minus]
+            .iter()
+            .enumerate()
+        {
+            out[3 * k..3 * k + 3].copy_from_slice(part);
         }
         out
     }
