@@ -99,6 +99,7 @@ impl Surface {
             PatchOptions {
                 max_level: options.max_level,
                 single_crease: options.single_crease,
+                ..PatchOptions::default()
             },
         )?;
         let warnings = mesh.warnings.iter().map(|w| w.to_string()).collect();

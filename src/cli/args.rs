@@ -5,6 +5,7 @@ use crate::dice::{DiceOptions, DiceRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::obj::read_obj;
 use crate::mesh::{generate, BoundaryInterpolation, ControlMesh, CreaseMethod, Options, Scheme};
+use crate::patch::approx::Approximation;
 use crate::patch::PatchOptions;
 use std::path::{Path, PathBuf};
 
@@ -44,6 +45,31 @@ impl From<SchemeArg> for Scheme {
         match s {
             SchemeArg::Catmark => Scheme::Catmark,
             SchemeArg::Loop => Scheme::Loop,
+        }
+    }
+}
+
+/// The surface of a Loop mesh on the command line (`--surface`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SurfaceArg {
+    /// The exact limit surface.
+    #[default]
+    Exact,
+    /// PN triangles from the limit positions and normals (C0).
+    Pn,
+    /// Walton-Meek G1 triangles from boundary data.
+    Wm,
+    /// Paper 002's G1 Gregory triangles from limit tangents and cross tangents.
+    Gregory,
+}
+
+impl From<SurfaceArg> for Approximation {
+    fn from(s: SurfaceArg) -> Self {
+        match s {
+            SurfaceArg::Exact => Approximation::Exact,
+            SurfaceArg::Pn => Approximation::Pn,
+            SurfaceArg::Wm => Approximation::Wm,
+            SurfaceArg::Gregory => Approximation::Gregory,
         }
     }
 }
@@ -140,6 +166,9 @@ pub struct DiceArgs {
     /// Maximum isolation level of the patch table.
     #[arg(long, default_value_t = crate::patch::table::DEFAULT_MAX_LEVEL)]
     pub max_level: usize,
+    /// The surface of a Loop mesh: exact, or paper 002's pn, wm or gregory approximation.
+    #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
+    pub surface: SurfaceArg,
 }
 
 impl Default for DiceArgs {
@@ -149,6 +178,7 @@ impl Default for DiceArgs {
             edge_length: None,
             max_rate: 256,
             max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
+            surface: SurfaceArg::Exact,
         }
     }
 }
@@ -158,6 +188,7 @@ impl DiceArgs {
     pub fn patch_options(&self) -> PatchOptions {
         PatchOptions {
             max_level: self.max_level,
+            surface: self.surface.into(),
             ..PatchOptions::default()
         }
     }

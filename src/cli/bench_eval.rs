@@ -89,6 +89,7 @@ pub fn eval_bench_near(
         PatchOptions {
             max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
             single_crease: true,
+            ..PatchOptions::default()
         },
     )?;
     let build_ms = ms_since(t0);

@@ -71,6 +71,7 @@ pub fn run_stats(args: &StatsCmd) -> Result<()> {
         PatchOptions {
             max_level: args.max_level,
             single_crease: !args.no_single_crease,
+            ..PatchOptions::default()
         },
     )?;
     let ms = t0.elapsed().as_secs_f64() * 1e3;

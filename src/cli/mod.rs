@@ -3,6 +3,7 @@
 //! implementation, not part of the library's API.
 
 pub mod accuracy;
+pub mod approx_error;
 pub mod args;
 pub mod bench_eval;
 pub mod bench_refine;
@@ -74,6 +75,8 @@ pub enum Command {
     BenchTrace(bench_trace::TraceBenchArgs),
     /// Accuracy of diced hits against the exact limit surface, per rate (JSON lines).
     Accuracy(accuracy::AccuracyCmd),
+    /// Distance of paper 002's approximations (pn, wm, gregory) to the exact Loop surface.
+    ApproxError(approx_error::ApproxErrorCmd),
     /// Cross-check the limit surface and the triangle intersector against Embree 4.
     #[cfg(feature = "embree")]
     Crosscheck(embree::CrosscheckArgs),
@@ -108,6 +111,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::BenchTrace(a) => bench_trace::run(&a),
         Command::Accuracy(a) => accuracy::run(&a),
+        Command::ApproxError(a) => approx_error::run(&a),
         #[cfg(feature = "embree")]
         Command::Crosscheck(a) => embree::run_crosscheck(&a),
         #[cfg(feature = "embree")]

@@ -57,6 +57,10 @@ pub struct RenderArgs {
     /// No progress bar and no summary on stderr.
     #[arg(long)]
     pub quiet: bool,
+    /// The surface of every Loop mesh in the scene (overrides its `surface` key): exact, or
+    /// paper 002's pn, wm or gregory approximation. Catmull-Clark meshes stay exact.
+    #[arg(long, value_enum)]
+    pub surface: Option<super::args::SurfaceArg>,
 }
 
 fn parse_res(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -125,7 +129,16 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
     let mut exr_out = Output::create(&args.output)?;
     let mut png_out = args.png.as_deref().map(Output::create).transpose()?;
     let mut levels_out = args.levels_png.as_deref().map(Output::create).transpose()?;
-    let desc = read_scene(&args.scene)?;
+    let mut desc = read_scene(&args.scene)?;
+    if let Some(s) = args.surface {
+        for m in desc
+            .meshes
+            .iter_mut()
+            .filter(|m| m.scheme == crate::mesh::Scheme::Loop)
+        {
+            m.surface = s.into();
+        }
+    }
     let mut settings = desc.render;
     if let Some(s) = args.spp {
         settings.spp = s;

@@ -3,6 +3,8 @@
 //! accuracy against the exact surface: [`probe`]), evaluation queries ([`eval`]) and the
 //! worker pool every command and benchmark runs in.
 
+pub mod approx_error;
+pub mod closest;
 pub mod eval;
 pub mod probe;
 pub mod rays;

@@ -253,16 +253,22 @@ impl World {
         stats.load_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        let mut table_keys: Vec<(usize, usize, crate::mesh::Scheme)> = Vec::new();
+        type TableKey = (
+            usize,
+            usize,
+            crate::mesh::Scheme,
+            crate::patch::approx::Approximation,
+        );
+        let mut table_keys: Vec<TableKey> = Vec::new();
         let table_of: Vec<usize> = desc
             .meshes
             .iter()
             .zip(&file_of)
-            .map(|(m, &f)| index_of(&mut table_keys, (f, m.max_level, m.scheme)))
+            .map(|(m, &f)| index_of(&mut table_keys, (f, m.max_level, m.scheme, m.surface)))
             .collect();
         let tables = table_keys
             .par_iter()
-            .map(|&(f, max_level, scheme)| {
+            .map(|&(f, max_level, scheme, surface)| {
                 PatchTable::with_options(
                     &controls[f],
                     crate::mesh::Options {
@@ -271,6 +277,7 @@ impl World {
                     },
                     PatchOptions {
                         max_level,
+                        surface,
                         ..PatchOptions::default()
                     },
                 )

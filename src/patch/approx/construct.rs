@@ -34,9 +34,11 @@
 //!   ours, with the paper's inputs (Loop limit points, tangents and cross tangents).
 //!
 //! Vertices where the tangent mask does not apply (boundaries, creases, corners,
-//! non-manifold) take their tangents from the exact surface: its derivative along the edge
-//! where the vertex is regular or the edge infinitely sharp (a B-spline curve there), else
-//! its direction with the chord's length.
+//! non-manifold) take their tangents from the exact surface where its parametric derivative
+//! along the edge means something over the whole edge (a regular vertex, or an infinitely
+//! sharp edge: a cubic B-spline crease curve), else PN's edge point. (At an irregular
+//! vertex with semi-sharp creases the exact derivative's direction holds only in a vanishing
+//! neighbourhood: used along a whole edge it rounds a creased box into a ball.)
 
 use super::gregory_tri::GregoryTri;
 use super::Approximation;
@@ -177,26 +179,24 @@ fn in_plane(x: [f64; 3], n: [f64; 3]) -> [f64; 3] {
 }
 
 /// The derivative of the exact surface at vertex `a` along the edge toward `b`, both corners
-/// of face `f` (for vertices without a tangent mask).
-fn exact_tangent(surface: &LoopSurface, f: usize, a: u32, b: u32, chord: f64) -> [f64; 3] {
+/// of face `f`, where it is the derivative of a curve that keeps its parameter (`a` regular
+/// for the box spline, or the edge infinitely sharp: a cubic B-spline crease); `None`
+/// elsewhere (at an irregular vertex the parametric derivative is 0 or ∞, and its direction
+/// holds only in a vanishing neighbourhood).
+fn exact_tangent(surface: &LoopSurface, f: usize, a: u32, b: u32) -> Option<[f64; 3]> {
     let level = surface.level();
-    let fv = level.topo.face_vertices(f);
-    let ca = fv.iter().position(|&x| x == a).unwrap_or(0);
-    let cb = fv.iter().position(|&x| x == b).unwrap_or(1);
-    let [u, v] = CORNER_UV[ca];
-    let d = [CORNER_UV[cb][0] - u, CORNER_UV[cb][1] - v];
-    let Ok(s) = surface.eval(FaceCoord::new(f as u32, 0, u, v)) else {
-        return [0.0; 3];
-    };
-    let t = add(scale(s.du, d[0]), scale(s.dv, d[1]));
     let e = level.topo.find_edge(a, b);
     let sharp_edge = e.is_some_and(|e| crease::is_infinite(level.edge_sharpness[e as usize]));
-    if regular_vertex(level, a, f) || sharp_edge {
-        t
-    } else {
-        // At an irregular vertex the parametric derivative is 0 or ∞: keep its direction.
-        scale(normalize(t), chord)
+    if !(regular_vertex(level, a, f) || sharp_edge) {
+        return None;
     }
+    let fv = level.topo.face_vertices(f);
+    let ca = fv.iter().position(|&x| x == a)?;
+    let cb = fv.iter().position(|&x| x == b)?;
+    let [u, v] = CORNER_UV[ca];
+    let d = [CORNER_UV[cb][0] - u, CORNER_UV[cb][1] - v];
+    let s = surface.eval(FaceCoord::new(f as u32, 0, u, v)).ok()?;
+    Some(add(scale(s.du, d[0]), scale(s.dv, d[1])))
 }
 
 /// Loop's subdominant eigenvalue `3/8 + cos(2π/n)/4` (paper 002, Eq. 3).
@@ -249,23 +249,22 @@ fn edge_data(
     if dot(na, nb) < 0.0 {
         nb = scale(nb, -1.0);
     }
-    let chord = sub(pb, pa);
-    let len = dot(chord, chord).sqrt();
+    // PN's edge point: the chord's third projected into the corner's tangent plane.
+    let pn_point = |p: [f64; 3], q: [f64; 3], n: [f64; 3]| add(p, scale(in_plane(sub(q, p), n), 1.0 / 3.0));
     let (ea, eb) = match kind {
         Approximation::Gregory => {
-            let point = |v: u32, w: u32, p: [f64; 3], n: [f64; 3]| match &rings[v as usize] {
+            let point = |v: u32, w: u32, p: [f64; 3], q: [f64; 3], n: [f64; 3]| match &rings
+                [v as usize]
+            {
                 Some(ring) => mask_edge_point(p, control, ring, w, n),
-                None => add(
-                    p,
-                    scale(in_plane(exact_tangent(surface, f, v, w, len), n), 1.0 / 3.0),
-                ),
+                None => match exact_tangent(surface, f, v, w) {
+                    Some(t) => add(p, scale(in_plane(t, n), 1.0 / 3.0)),
+                    None => pn_point(p, q, n),
+                },
             };
-            (point(a, b, pa, na), point(b, a, pb, nb))
+            (point(a, b, pa, pb, na), point(b, a, pb, pa, nb))
         }
-        _ => (
-            add(pa, scale(in_plane(chord, na), 1.0 / 3.0)),
-            add(pb, scale(in_plane(scale(chord, -1.0), nb), 1.0 / 3.0)),
-        ),
+        _ => (pn_point(pa, pb, na), pn_point(pb, pa, nb)),
     };
     let curve = [pa, ea, eb, pb];
     let t0 = scale(sub(ea, pa), 3.0);

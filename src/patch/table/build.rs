@@ -11,6 +11,7 @@ use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
 use crate::patch::local::{child_face, extract_faces};
 use crate::patch::regular::{classify, RegularKind};
 use crate::patch::stam;
+use crate::patch::approx::{Approximation, TriApprox};
 use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
 use crate::refine::step;
@@ -212,7 +213,18 @@ impl PatchTable {
         let opts = PatchOptions {
             single_crease: opts.single_crease && method == CreaseMethod::Uniform,
             max_level: opts.max_level.max(1),
+            surface: opts.surface,
         };
+        if opts.surface != Approximation::Exact && options.scheme != Scheme::Loop {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "surface `{}` approximates Loop meshes (paper 002); a Catmull-Clark mesh's \
+                     surface is exact",
+                    opts.surface
+                ),
+            ));
+        }
         let nb = base.num_vertices();
         let mut table = PatchTable {
             patches: Vec::new(),
@@ -233,11 +245,16 @@ impl PatchTable {
             options: opts,
             stats: PatchStats::default(),
             loop_surface: None,
+            approx: None,
         };
         if options.scheme == Scheme::Loop {
             // A Loop mesh's surface is its own evaluator; each triangle is three sub-quads
             // (the domains of dicing), as a Catmull-Clark triangle's sub-faces are.
-            table.loop_surface = Some(std::sync::Arc::new(LoopSurface::new(mesh, options)?));
+            let exact = LoopSurface::new(mesh, options)?;
+            if opts.surface != Approximation::Exact {
+                table.approx = Some(std::sync::Arc::new(TriApprox::new(&exact, opts.surface)?));
+            }
+            table.loop_surface = Some(std::sync::Arc::new(exact));
             table.root_offsets = (0..=base.num_faces() as u32).map(|f| 3 * f).collect();
             return Ok(table);
         }
@@ -321,8 +338,15 @@ impl PatchTable {
     /// Re-poses the table: new control positions, same topology.
     pub fn set_positions(&mut self, base: &[[f64; 3]]) {
         if let Some(surface) = &mut self.loop_surface {
-            if let Err(e) = std::sync::Arc::make_mut(surface).set_positions(base) {
+            let surface = std::sync::Arc::make_mut(surface);
+            if let Err(e) = surface.set_positions(base) {
                 panic!("PatchTable::set_positions: {e}");
+            }
+            if let Some(approx) = &mut self.approx {
+                match TriApprox::new(surface, approx.kind()) {
+                    Ok(a) => *approx = std::sync::Arc::new(a),
+                    Err(e) => panic!("PatchTable::set_positions: {e}"),
+                }
             }
             return;
         }

@@ -11,6 +11,9 @@ use crate::patch::single_crease;
 impl PatchTable {
     /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
     pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        if let Some(approx) = &self.approx {
+            return approx.eval_sub_quad(at);
+        }
         if let Some(surface) = &self.loop_surface {
             return surface.eval_sub_quad(at);
         }

@@ -44,6 +44,9 @@ pub struct PatchOptions {
     /// Use single-crease patches (paper 000) for regular faces with one semi-sharp crease
     /// (uniform crease rule only); otherwise such faces are refined like other features.
     pub single_crease: bool,
+    /// The surface a Loop mesh stands for: exact, or one of paper 002's approximations
+    /// ([`crate::patch::approx`]); Catmull-Clark meshes are always exact.
+    pub surface: crate::patch::approx::Approximation,
 }
 
 impl Default for PatchOptions {
@@ -51,6 +54,7 @@ impl Default for PatchOptions {
         PatchOptions {
             max_level: DEFAULT_MAX_LEVEL,
             single_crease: true,
+            surface: crate::patch::approx::Approximation::Exact,
         }
     }
 }
@@ -173,6 +177,9 @@ pub struct PatchTable {
     /// Under the Loop scheme the surface's evaluator (and `patches` is empty): `eval` at
     /// `(face, k, u, v)` is [`LoopSurface::eval_sub_quad`].
     loop_surface: Option<std::sync::Arc<crate::patch::LoopSurface>>,
+    /// Under the Loop scheme with an approximate surface, its patches: `eval` is
+    /// [`crate::patch::approx::TriApprox::eval_sub_quad`].
+    approx: Option<std::sync::Arc<crate::patch::approx::TriApprox>>,
 }
 
 /// A limit-surface sample.
@@ -220,6 +227,7 @@ impl PatchTable {
             })
             .sum();
         self.loop_surface.as_ref().map_or(0, |s| s.bytes())
+            + self.approx.as_ref().map_or(0, |s| s.bytes())
             + self.point_stencils.bytes()
             + self
                 .chain
@@ -238,6 +246,11 @@ impl PatchTable {
     /// The Loop evaluator when the table's mesh is subdivided with the Loop scheme.
     pub fn loop_surface(&self) -> Option<&crate::patch::LoopSurface> {
         self.loop_surface.as_deref()
+    }
+
+    /// The approximate surface evaluated instead of the exact one, if any.
+    pub fn approx(&self) -> Option<&crate::patch::approx::TriApprox> {
+        self.approx.as_deref()
     }
 
     /// Number of sub-faces of base face `f` (1 for a quad, n for an n-gon; 3 for a Loop

@@ -101,6 +101,9 @@ pub struct MeshDesc {
     pub max_rate: u32,
     /// Subdivision scheme (`scheme = "catmark"` or `"loop"`; Catmull-Clark by default).
     pub scheme: crate::mesh::Scheme,
+    /// The surface of a Loop mesh (`surface = "exact"`, `"pn"`, `"wm"` or `"gregory"`:
+    /// paper 002's approximations; exact by default, and always for Catmull-Clark).
+    pub surface: crate::patch::approx::Approximation,
     /// Line of the entry in the scene file, for messages.
     pub line: usize,
 }
@@ -343,6 +346,27 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
                 }
             },
         };
+        let surface = match &r.surface {
+            None => crate::patch::approx::Approximation::Exact,
+            Some(s) => {
+                let a: crate::patch::approx::Approximation = s
+                    .get_ref()
+                    .parse()
+                    .map_err(|e: Error| src.err(s.span(), e.message))?;
+                if a != crate::patch::approx::Approximation::Exact
+                    && scheme != crate::mesh::Scheme::Loop
+                {
+                    return Err(src.err(
+                        s.span(),
+                        format!(
+                            "surface '{a}' approximates Loop meshes; add scheme = \"loop\" \
+                             (a Catmull-Clark mesh's surface is exact)"
+                        ),
+                    ));
+                }
+                a
+            }
+        };
         meshes.push(MeshDesc {
             file: base.join(r.file.get_ref()),
             material,
@@ -351,6 +375,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             max_level,
             max_rate,
             scheme,
+            surface,
             line: src.line_of(m.span().start),
         });
     }

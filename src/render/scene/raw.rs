@@ -125,6 +125,7 @@ pub(super) struct RawMesh {
     pub(super) max_level: Option<Spanned<i64>>,
     pub(super) max_rate: Option<Spanned<i64>>,
     pub(super) scheme: Option<Spanned<String>>,
+    pub(super) surface: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
