@@ -3,7 +3,7 @@
 
 use super::args::{load, RuleArgs, SchemeArg, SurfaceArg, ThreadArgs};
 use crate::error::{Error, ErrorKind, Result};
-use crate::harness::approx_error::{measure, ErrorOptions};
+use crate::harness::approx_error::{ErrorOptions, Reference};
 use crate::mesh::Scheme;
 use crate::patch::approx::{Approximation, TriApprox};
 use crate::patch::LoopSurface;
@@ -62,6 +62,7 @@ pub fn run(args: &ApproxErrorCmd) -> Result<()> {
             seed: args.seed,
             tess: args.tess,
         };
+        let reference = Reference::new(&exact, opts)?;
         if !args.json {
             println!(
                 "{}: {} triangles; distances relative to the bounding-box diagonal, {} points each way",
@@ -83,7 +84,7 @@ pub fn run(args: &ApproxErrorCmd) -> Result<()> {
                 ));
             }
             let approx = TriApprox::new(&exact, kind)?;
-            let e = measure(&exact, &approx, opts)?;
+            let e = reference.measure(&approx)?;
             if args.json {
                 println!("{}", e.json());
             } else {

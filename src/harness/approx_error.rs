@@ -94,6 +94,9 @@ impl ApproxError {
 /// A surface given face by face in OpenSubdiv's triangle parameter (`None` in holes).
 type TriEval<'a> = &'a (dyn Fn(u32, f64, f64) -> Option<Sample> + Sync);
 
+/// A surface's positions alone.
+type TriPos<'a> = &'a (dyn Fn(u32, f64, f64) -> Option<[f64; 3]> + Sync);
+
 /// A tessellation of a triangle surface with each point's parameter.
 struct Tess {
     mesh: ClosestMesh,
@@ -102,7 +105,7 @@ struct Tess {
     cdf: Vec<f64>,
 }
 
-fn tessellate(faces: usize, n: usize, eval: TriEval) -> Result<Tess> {
+fn tessellate(faces: usize, n: usize, eval: TriPos) -> Result<Tess> {
     let per_face: Vec<Option<(Vec<[f64; 3]>, Vec<(u32, f64, f64)>)>> = (0..faces as u32)
         .into_par_iter()
         .map(|f| {
@@ -111,7 +114,7 @@ fn tessellate(faces: usize, n: usize, eval: TriEval) -> Result<Tess> {
             for j in 0..=n {
                 for i in 0..=n - j {
                     let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
-                    pts.push(eval(f, u, v)?.p);
+                    pts.push(eval(f, u, v)?);
                     params.push((f, u, v));
                 }
             }
@@ -154,18 +157,6 @@ fn tessellate(faces: usize, n: usize, eval: TriEval) -> Result<Tess> {
 }
 
 impl Tess {
-    fn diagonal(&self, points: impl Iterator<Item = [f64; 3]>) -> f64 {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in points {
-            for i in 0..3 {
-                lo[i] = lo[i].min(p[i]);
-                hi[i] = hi[i].max(p[i]);
-            }
-        }
-        norm(sub(hi, lo))
-    }
-
     /// The parameter of barycentric point `w` of triangle `t`.
     fn param(&self, t: u32, w: [f64; 3]) -> (u32, f64, f64) {
         let tri = self.mesh.triangle(t);
@@ -273,37 +264,68 @@ fn one_way(
     Ok((max, sum / n, (sq / n).sqrt(), nmax, nsum / n))
 }
 
-/// The distance between `approx` and the exact surface `exact` it approximates.
-pub fn measure(exact: &LoopSurface, approx: &TriApprox, opts: ErrorOptions) -> Result<ApproxError> {
-    if opts.samples == 0 || opts.tess == 0 {
-        return Err(Error::new(ErrorKind::Usage, "samples and tessellation rate must be at least 1"));
+/// The exact surface prepared once for measuring several approximations of it: its
+/// tessellation and diagonal.
+pub struct Reference<'a> {
+    exact: &'a LoopSurface,
+    tess: Tess,
+    diagonal: f64,
+    opts: ErrorOptions,
+}
+
+impl<'a> Reference<'a> {
+    /// Tessellates `exact` (positions only: no secants at its vertices).
+    pub fn new(exact: &'a LoopSurface, opts: ErrorOptions) -> Result<Self> {
+        if opts.samples == 0 || opts.tess == 0 {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "samples and tessellation rate must be at least 1",
+            ));
+        }
+        let pos = |f: u32, u: f64, v: f64| exact.position(FaceCoord::new(f, 0, u, v)).ok();
+        let tess = tessellate(exact.num_faces(), opts.tess, &pos)?;
+        let diagonal = tess.mesh.diagonal();
+        Ok(Reference {
+            exact,
+            tess,
+            diagonal,
+            opts,
+        })
     }
-    let ex = |f: u32, u: f64, v: f64| exact.eval(FaceCoord::new(f, 0, u, v)).ok();
-    let ap = |f: u32, u: f64, v: f64| approx.eval(FaceCoord::new(f, 0, u, v)).ok();
-    let (te, ta) = (
-        tessellate(exact.num_faces(), opts.tess, &ex)?,
-        tessellate(approx.num_faces(), opts.tess, &ap)?,
-    );
-    let diagonal = te.diagonal((0..te.params.len()).map(|i| {
-        let (f, u, v) = te.params[i];
-        ex(f, u, v).map_or([0.0; 3], |s| s.p)
-    }));
-    let fwd = one_way((&ta, &ap), (&te, &ex), opts.samples, opts.seed)?;
-    let rev = one_way((&te, &ex), (&ta, &ap), opts.samples, opts.seed.wrapping_add(1))?;
-    let rel = |x: f64| if diagonal > 0.0 { x / diagonal } else { x };
-    Ok(ApproxError {
-        surface: approx.kind(),
-        max: rel(fwd.0),
-        mean: rel(fwd.1),
-        rms: rel(fwd.2),
-        max_reverse: rel(rev.0),
-        mean_reverse: rel(rev.1),
-        rms_reverse: rel(rev.2),
-        normal_max_deg: fwd.3,
-        normal_mean_deg: fwd.4,
-        samples: opts.samples,
-        diagonal,
-    })
+
+    /// The distance between `approx` and the exact surface.
+    pub fn measure(&self, approx: &TriApprox) -> Result<ApproxError> {
+        let opts = self.opts;
+        let exact = self.exact;
+        let ex = |f: u32, u: f64, v: f64| exact.eval(FaceCoord::new(f, 0, u, v)).ok();
+        let ap = |f: u32, u: f64, v: f64| approx.eval(FaceCoord::new(f, 0, u, v)).ok();
+        let ap_p = |f: u32, u: f64, v: f64| ap(f, u, v).map(|s| s.p);
+        let ta = tessellate(approx.num_faces(), opts.tess, &ap_p)?;
+        let te = &self.tess;
+        let fwd = one_way((&ta, &ap), (te, &ex), opts.samples, opts.seed)?;
+        let rev = one_way((te, &ex), (&ta, &ap), opts.samples, opts.seed.wrapping_add(1))?;
+        let diagonal = self.diagonal;
+        let rel = |x: f64| if diagonal > 0.0 { x / diagonal } else { x };
+        Ok(ApproxError {
+            surface: approx.kind(),
+            max: rel(fwd.0),
+            mean: rel(fwd.1),
+            rms: rel(fwd.2),
+            max_reverse: rel(rev.0),
+            mean_reverse: rel(rev.1),
+            rms_reverse: rel(rev.2),
+            normal_max_deg: fwd.3,
+            normal_mean_deg: fwd.4,
+            samples: opts.samples,
+            diagonal,
+        })
+    }
+}
+
+/// The distance between `approx` and the exact surface `exact` it approximates (one
+/// approximation: [`Reference`] prepares the exact side once for several).
+pub fn measure(exact: &LoopSurface, approx: &TriApprox, opts: ErrorOptions) -> Result<ApproxError> {
+    Reference::new(exact, opts)?.measure(approx)
 }
 
 #[cfg(test)]
@@ -324,7 +346,9 @@ mod tests {
             })
         };
         let (a, b) = (plane(0.0), plane(0.01));
-        let (ta, tb) = (tessellate(1, 4, &a).unwrap(), tessellate(1, 4, &b).unwrap());
+        let pa = |f: u32, u: f64, v: f64| a(f, u, v).map(|s| s.p);
+        let pb = |f: u32, u: f64, v: f64| b(f, u, v).map(|s| s.p);
+        let (ta, tb) = (tessellate(1, 4, &pa).unwrap(), tessellate(1, 4, &pb).unwrap());
         let same = one_way((&ta, &a), (&ta, &a), 2000, 3).unwrap();
         assert!(same.0 < 1e-15 && same.3 < 1e-9, "{same:?}");
         let off = one_way((&ta, &a), (&tb, &b), 2000, 3).unwrap();

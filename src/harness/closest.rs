@@ -109,6 +109,19 @@ impl ClosestMesh {
         self.build(left + 1, mid, end, centroids);
     }
 
+    /// The diagonal of the points' bounding box.
+    pub fn diagonal(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.points {
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+        crate::vec3::norm(sub(hi, lo))
+    }
+
     /// Triangle `t`'s point indices.
     pub fn triangle(&self, t: u32) -> [u32; 3] {
         self.tris[t as usize]

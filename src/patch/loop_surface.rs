@@ -203,6 +203,16 @@ impl LoopSurface {
     /// Position and derivatives at `at` (`at.k` must be 0). Holes and parameters outside the
     /// triangle (`u, v ≥ 0`, `u + v ≤ 1`) are errors.
     pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
+        self.eval_with(at, true)
+    }
+
+    /// [`Self::eval`]'s position alone: at an irregular vertex it skips the secants (two
+    /// descents 24 levels deep) that stand in for the derivatives there.
+    pub fn position(&self, at: FaceCoord) -> Result<[f64; 3]> {
+        Ok(self.eval_with(at, false)?.p)
+    }
+
+    fn eval_with(&self, at: FaceCoord, derivatives: bool) -> Result<Sample> {
         let f = at.face as usize;
         let bad = |m: String| Err(Error::new(ErrorKind::Usage, m));
         if f >= self.num_faces() {
@@ -234,7 +244,7 @@ impl LoopSurface {
                 Node::Hole => return bad(format!("face {} is a hole", at.face)),
                 Node::Regular(cps) => return Ok(sample(loop_box::eval(cps, u, v), scale, depth)),
                 Node::Cap(local) => {
-                    let mut s = self.descend((**local).clone(), u, v, true);
+                    let mut s = self.descend((**local).clone(), u, v, derivatives);
                     s.du = s.du.map(|x| x * scale);
                     s.dv = s.dv.map(|x| x * scale);
                     let s2 = scale * scale;
