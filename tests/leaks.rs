@@ -15,6 +15,7 @@ use limitray::grid::GridMesh;
 use limitray::harness::probe::{aimed_rays, count_leaks, inside_origins, sphere_dirs};
 use limitray::mesh::obj::read_obj;
 use limitray::mesh::ControlMesh;
+use limitray::patch::approx::Approximation;
 use limitray::patch::{PatchOptions, PatchTable};
 
 const RATES: [u32; 5] = [1, 2, 4, 16, 64];
@@ -199,9 +200,28 @@ fn corpus_closed_shapes_do_not_leak() {
 /// origin and far from it, 300k random rays per case plus the aimed ones.
 #[test]
 fn corpus_closed_loop_shapes_do_not_leak() {
-    let Some(models) = common::shared_models() else {
-        return;
-    };
+    if let Some((cases, rays)) = loop_cases(Approximation::Exact, 300_000) {
+        eprintln!("Loop: {cases} cases, {rays} rays, 0 misses");
+        assert!(cases >= 100, "only {cases} cases");
+    }
+}
+
+/// Paper 002's approximations of the same Loop surfaces (PN, Walton–Meek, Gregory
+/// triangles) diced the same way: the same cases, 100k random rays each plus the aimed ones.
+#[test]
+fn loop_approximations_do_not_leak() {
+    for surface in [Approximation::Pn, Approximation::Wm, Approximation::Gregory] {
+        if let Some((cases, rays)) = loop_cases(surface, 100_000) {
+            eprintln!("Loop {surface}: {cases} cases, {rays} rays, 0 misses");
+            assert!(cases >= 100, "only {cases} cases");
+        }
+    }
+}
+
+/// Probes every closed Loop case (see [`corpus_closed_loop_shapes_do_not_leak`]) on
+/// `surface` with `per_case` random rays; `(cases, rays)`, or `None` without the corpus.
+fn loop_cases(surface: Approximation, per_case: usize) -> Option<(usize, usize)> {
+    let models = common::shared_models()?;
     let mut cases = 0;
     let mut rays = 0usize;
     // The corpus's loop shapes and the bundled Loop scene's meshes (scenes/loop.toml).
@@ -226,19 +246,22 @@ fn corpus_closed_loop_shapes_do_not_leak() {
             }
             for by in [[0.0; 3], FAR] {
                 let m = translated(&mesh, by);
-                let table = PatchTable::new(&m, PatchOptions::default()).unwrap();
+                let opts = PatchOptions {
+                    surface,
+                    ..PatchOptions::default()
+                };
+                let table = PatchTable::new(&m, opts).unwrap();
                 let (_, bvh) = build_from(table, &m, rate);
                 let cast = probe(
-                    &format!("{name} (Loop) rate {rate} at {by:?}"),
+                    &format!("{name} (Loop, {surface}) rate {rate} at {by:?}"),
                     &bvh,
                     mesh.diagonal(),
-                    300_000,
+                    per_case,
                 );
                 rays += cast;
                 cases += (cast > 0) as usize;
             }
         }
     }
-    eprintln!("Loop: {cases} cases, {rays} rays, 0 misses");
-    assert!(cases >= 100, "only {cases} cases");
+    Some((cases, rays))
 }

@@ -18,7 +18,12 @@ pub struct ApproxErrorCmd {
     #[command(flatten)]
     pub rules: RuleArgs,
     /// Surfaces to measure, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "pn,wm,gregory")]
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "pn,wm,gregory"
+    )]
     pub surface: Vec<SurfaceArg>,
     /// Points drawn on each surface (each direction).
     #[arg(long, default_value_t = 100_000)]
@@ -43,7 +48,10 @@ pub fn run(args: &ApproxErrorCmd) -> Result<()> {
         return Err(Error::new(ErrorKind::Usage, "--tess must be in 1..=64"));
     }
     if args.samples == 0 || args.samples > 100_000_000 {
-        return Err(Error::new(ErrorKind::Usage, "--samples must be in 1..=100000000"));
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "--samples must be in 1..=100000000",
+        ));
     }
     let mesh = load(&args.mesh)?;
     let mut rules = args.rules.clone();

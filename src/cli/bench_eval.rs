@@ -2,11 +2,12 @@
 //! once, then batches of random `(face, k, u, v)` queries ([`eval_queries`]) evaluated in
 //! parallel ([`eval_batch`]).
 
-use super::args::{MeshSource, ThreadArgs};
+use super::args::{MeshSource, RuleArgs, SurfaceArg, ThreadArgs};
 use super::bench_refine::{median, ms_since, round4};
 use crate::error::{Error, ErrorKind, Result};
 use crate::harness::eval::{eval_batch, eval_queries_near, Near};
 use crate::mesh::ControlMesh;
+use crate::patch::approx::Approximation;
 use crate::patch::{PatchOptions, PatchTable};
 use std::time::Instant;
 
@@ -30,6 +31,12 @@ pub struct BenchEvalArgs {
     /// extraordinary vertex corner.
     #[arg(long, value_enum, default_value_t = Near::Uniform)]
     pub near: Near,
+    /// Subdivision rules.
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    /// The surface of a Loop mesh: exact, or paper 002's pn, wm or gregory approximation.
+    #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
+    pub surface: SurfaceArg,
 }
 
 /// Runs `limitray bench-eval`: one JSON line on stdout.
@@ -39,7 +46,19 @@ pub fn run(args: &BenchEvalArgs) -> Result<()> {
         grid: None,
     }
     .load()?;
-    let v = eval_bench_near(&m, args.samples, args.threads.count(), args.seed, args.near)?;
+    let mut m = m;
+    m.options = args.rules.options(&m);
+    let mut v = eval_bench_near(
+        &m,
+        args.samples,
+        args.threads.count(),
+        args.seed,
+        args.near,
+        args.surface.into(),
+    )?;
+    v["surface"] = crate::patch::approx::Approximation::from(args.surface)
+        .name()
+        .into();
     println!("{v}");
     Ok(())
 }
@@ -64,17 +83,25 @@ pub fn eval_bench(
     threads: usize,
     seed: u64,
 ) -> Result<serde_json::Value> {
-    eval_bench_near(mesh, samples, threads, seed, Near::Uniform)
+    eval_bench_near(
+        mesh,
+        samples,
+        threads,
+        seed,
+        Near::Uniform,
+        Approximation::Exact,
+    )
 }
 
-/// [`eval_bench`] with the queries placed by `near` ([`eval_queries_near`]); the JSON also
-/// has `near` (its name).
+/// [`eval_bench`] with the queries placed by `near` ([`eval_queries_near`]) on `surface`
+/// (a Loop mesh's approximation, or exact); the JSON also has `near` (its name).
 pub fn eval_bench_near(
     mesh: &ControlMesh,
     samples: usize,
     threads: usize,
     seed: u64,
     near: Near,
+    surface: Approximation,
 ) -> Result<serde_json::Value> {
     let usage = |m: String| Error::new(ErrorKind::Usage, m);
     if samples == 0 {
@@ -89,7 +116,7 @@ pub fn eval_bench_near(
         PatchOptions {
             max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
             single_crease: true,
-            ..PatchOptions::default()
+            surface,
         },
     )?;
     let build_ms = ms_since(t0);

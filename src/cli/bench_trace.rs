@@ -1,7 +1,7 @@
 //! `limitray bench-trace`: patch table, dicing and grid-core build times, and ray queries per
 //! second.
 
-use super::args::{MeshSource, ThreadArgs};
+use super::args::{MeshSource, RuleArgs, SurfaceArg, ThreadArgs};
 use crate::dice::{dice, DiceOptions, DiceRate};
 use crate::error::Result;
 use crate::grid::GridMesh;
@@ -25,6 +25,12 @@ pub struct TraceBenchArgs {
     /// Repetitions; the median is reported.
     #[arg(long, default_value_t = 5)]
     pub reps: usize,
+    /// Subdivision rules.
+    #[command(flatten)]
+    pub rules: RuleArgs,
+    /// The surface of a Loop mesh: exact, or paper 002's pn, wm or gregory approximation.
+    #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
+    pub surface: SurfaceArg,
 }
 
 /// Median of wall-clock seconds of `reps` runs of `f`.
@@ -52,7 +58,14 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
     let threads = args.threads.count();
     args.threads.pool()?.install(|| {
         let t0 = std::time::Instant::now();
-        let table = PatchTable::new(&mesh, PatchOptions::default())?;
+        let table = PatchTable::with_options(
+            &mesh,
+            args.rules.options(&mesh),
+            PatchOptions {
+                surface: args.surface.into(),
+                ..PatchOptions::default()
+            },
+        )?;
         let t1 = std::time::Instant::now();
         let d = dice(
             &table,
@@ -71,6 +84,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
         let ms =
             |a: std::time::Instant, b: std::time::Instant| round((b - a).as_secs_f64() * 1e3, 1);
         let mut out = serde_json::json!({
+            "surface": crate::patch::approx::Approximation::from(args.surface).name(),
             "triangles": tris,
             "threads": threads,
             "table_ms": ms(t0, t1),

@@ -134,13 +134,20 @@ fn tessellate(faces: usize, n: usize, eval: TriPos) -> Result<Tess> {
             for i in 0..n - j {
                 tris.push([base + idx(i, j), base + idx(i + 1, j), base + idx(i, j + 1)]);
                 if i + j + 2 <= n {
-                    tris.push([base + idx(i + 1, j), base + idx(i + 1, j + 1), base + idx(i, j + 1)]);
+                    tris.push([
+                        base + idx(i + 1, j),
+                        base + idx(i + 1, j + 1),
+                        base + idx(i, j + 1),
+                    ]);
                 }
             }
         }
     }
     if tris.is_empty() {
-        return Err(Error::new(ErrorKind::Usage, "the surface has no faces outside holes"));
+        return Err(Error::new(
+            ErrorKind::Usage,
+            "the surface has no faces outside holes",
+        ));
     }
     let mut cdf = Vec::with_capacity(tris.len());
     let mut total = 0.0;
@@ -235,7 +242,9 @@ fn one_way(
             for _ in 0..n {
                 let (f, u, v) = src.0.draw(&mut rng);
                 let Some(s) = (src.1)(f, u, v) else { continue };
-                let Some((d, nd)) = project(dst.0, dst.1, s.p) else { continue };
+                let Some((d, nd)) = project(dst.0, dst.1, s.p) else {
+                    continue;
+                };
                 let ns = normalize(cross(s.du, s.dv));
                 let ang = norm(cross(ns, nd)).atan2(dot(ns, nd)).to_degrees();
                 acc.0 = acc.0.max(d);
@@ -248,7 +257,8 @@ fn one_way(
             acc
         })
         .collect();
-    let (mut max, mut sum, mut sq, mut nmax, mut nsum, mut count) = (0.0f64, 0.0, 0.0, 0.0f64, 0.0, 0);
+    let (mut max, mut sum, mut sq, mut nmax, mut nsum, mut count) =
+        (0.0f64, 0.0, 0.0, 0.0f64, 0.0, 0);
     for p in parts {
         max = max.max(p.0);
         sum += p.1;
@@ -303,7 +313,12 @@ impl<'a> Reference<'a> {
         let ta = tessellate(approx.num_faces(), opts.tess, &ap_p)?;
         let te = &self.tess;
         let fwd = one_way((&ta, &ap), (te, &ex), opts.samples, opts.seed)?;
-        let rev = one_way((te, &ex), (&ta, &ap), opts.samples, opts.seed.wrapping_add(1))?;
+        let rev = one_way(
+            (te, &ex),
+            (&ta, &ap),
+            opts.samples,
+            opts.seed.wrapping_add(1),
+        )?;
         let diagonal = self.diagonal;
         let rel = |x: f64| if diagonal > 0.0 { x / diagonal } else { x };
         Ok(ApproxError {
@@ -337,21 +352,29 @@ mod tests {
     /// on a flat sheet, where the closed form is exact.
     #[test]
     fn distances_of_a_known_offset() {
-        let plane = |dz: f64| move |_f: u32, u: f64, v: f64| {
-            Some(Sample {
-                p: [u, v, dz],
-                du: [1.0, 0.0, 0.0],
-                dv: [0.0, 1.0, 0.0],
-                ..Sample::default()
-            })
+        let plane = |dz: f64| {
+            move |_f: u32, u: f64, v: f64| {
+                Some(Sample {
+                    p: [u, v, dz],
+                    du: [1.0, 0.0, 0.0],
+                    dv: [0.0, 1.0, 0.0],
+                    ..Sample::default()
+                })
+            }
         };
         let (a, b) = (plane(0.0), plane(0.01));
         let pa = |f: u32, u: f64, v: f64| a(f, u, v).map(|s| s.p);
         let pb = |f: u32, u: f64, v: f64| b(f, u, v).map(|s| s.p);
-        let (ta, tb) = (tessellate(1, 4, &pa).unwrap(), tessellate(1, 4, &pb).unwrap());
+        let (ta, tb) = (
+            tessellate(1, 4, &pa).unwrap(),
+            tessellate(1, 4, &pb).unwrap(),
+        );
         let same = one_way((&ta, &a), (&ta, &a), 2000, 3).unwrap();
         assert!(same.0 < 1e-15 && same.3 < 1e-9, "{same:?}");
         let off = one_way((&ta, &a), (&tb, &b), 2000, 3).unwrap();
-        assert!((off.0 - 0.01).abs() < 1e-15 && (off.1 - 0.01).abs() < 1e-15, "{off:?}");
+        assert!(
+            (off.0 - 0.01).abs() < 1e-15 && (off.1 - 0.01).abs() < 1e-15,
+            "{off:?}"
+        );
     }
 }

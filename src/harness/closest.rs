@@ -50,7 +50,15 @@ impl ClosestMesh {
         let centroids: Vec<[f64; 3]> = m
             .tris
             .iter()
-            .map(|t| scale(add(add(m.points[t[0] as usize], m.points[t[1] as usize]), m.points[t[2] as usize]), 1.0 / 3.0))
+            .map(|t| {
+                scale(
+                    add(
+                        add(m.points[t[0] as usize], m.points[t[1] as usize]),
+                        m.points[t[2] as usize],
+                    ),
+                    1.0 / 3.0,
+                )
+            })
             .collect();
         m.order = (0..m.tris.len() as u32).collect();
         m.nodes.push(Node {
@@ -89,7 +97,9 @@ impl ClosestMesh {
             return;
         }
         let ext = sub(hi, lo);
-        let axis = (0..3).max_by(|&a, &b| ext[a].total_cmp(&ext[b])).unwrap_or(0);
+        let axis = (0..3)
+            .max_by(|&a, &b| ext[a].total_cmp(&ext[b]))
+            .unwrap_or(0);
         let mid = (start + end) / 2;
         self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
             centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
@@ -159,7 +169,10 @@ impl ClosestMesh {
                 }
             } else {
                 let (l, r) = (node.first, node.first + 1);
-                let (dl, dr) = (box_d2(&self.nodes[l as usize]), box_d2(&self.nodes[r as usize]));
+                let (dl, dr) = (
+                    box_d2(&self.nodes[l as usize]),
+                    box_d2(&self.nodes[r as usize]),
+                );
                 // Push the farther first: the nearer is searched next.
                 if dl < dr {
                     stack.push((dr, r));
@@ -176,7 +189,12 @@ impl ClosestMesh {
 
 /// The point of triangle `(a, b, c)` closest to `x`: its barycentric weights and position.
 /// By the region of the triangle's plane `x` projects into (a vertex, an edge or the inside).
-pub fn closest_on_triangle(x: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+pub fn closest_on_triangle(
+    x: [f64; 3],
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
     let ab = sub(b, a);
     let ac = sub(c, a);
     let ax = sub(x, a);
@@ -237,7 +255,12 @@ mod tests {
             let brute = tris
                 .iter()
                 .map(|t| {
-                    let (_, q) = closest_on_triangle(x, points[t[0] as usize], points[t[1] as usize], points[t[2] as usize]);
+                    let (_, q) = closest_on_triangle(
+                        x,
+                        points[t[0] as usize],
+                        points[t[1] as usize],
+                        points[t[2] as usize],
+                    );
                     dot(sub(q, x), sub(q, x))
                 })
                 .fold(f64::INFINITY, f64::min);

@@ -185,7 +185,7 @@ impl LoopSurface {
                     (u, v) = child_uv((f as usize >> (2 * l)) & 3, u, v);
                 }
                 let base = (f as usize >> (2 * depth)) as u32;
-                Ok(self.eval(FaceCoord::new(base, 0, u, v))?.p)
+                self.position(FaceCoord::new(base, 0, u, v))
             })
             .collect()
     }

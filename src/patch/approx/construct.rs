@@ -250,18 +250,18 @@ fn edge_data(
         nb = scale(nb, -1.0);
     }
     // PN's edge point: the chord's third projected into the corner's tangent plane.
-    let pn_point = |p: [f64; 3], q: [f64; 3], n: [f64; 3]| add(p, scale(in_plane(sub(q, p), n), 1.0 / 3.0));
+    let pn_point =
+        |p: [f64; 3], q: [f64; 3], n: [f64; 3]| add(p, scale(in_plane(sub(q, p), n), 1.0 / 3.0));
     let (ea, eb) = match kind {
         Approximation::Gregory => {
-            let point = |v: u32, w: u32, p: [f64; 3], q: [f64; 3], n: [f64; 3]| match &rings
-                [v as usize]
-            {
-                Some(ring) => mask_edge_point(p, control, ring, w, n),
-                None => match exact_tangent(surface, f, v, w) {
-                    Some(t) => add(p, scale(in_plane(t, n), 1.0 / 3.0)),
-                    None => pn_point(p, q, n),
-                },
-            };
+            let point =
+                |v: u32, w: u32, p: [f64; 3], q: [f64; 3], n: [f64; 3]| match &rings[v as usize] {
+                    Some(ring) => mask_edge_point(p, control, ring, w, n),
+                    None => match exact_tangent(surface, f, v, w) {
+                        Some(t) => add(p, scale(in_plane(t, n), 1.0 / 3.0)),
+                        None => pn_point(p, q, n),
+                    },
+                };
             (point(a, b, pa, pb, na), point(b, a, pb, pa, nb))
         }
         _ => (pn_point(pa, pb, na), pn_point(pb, pa, nb)),
