@@ -18,6 +18,7 @@ fn patches(sharpness: f32, single_crease: bool) -> usize {
         PatchOptions {
             max_level: 10,
             single_crease,
+            ..PatchOptions::default()
         },
     )
     .unwrap();

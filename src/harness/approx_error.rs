@@ -106,7 +106,8 @@ struct Tess {
 }
 
 fn tessellate(faces: usize, n: usize, eval: TriPos) -> Result<Tess> {
-    let per_face: Vec<Option<(Vec<[f64; 3]>, Vec<(u32, f64, f64)>)>> = (0..faces as u32)
+    type FaceBlock = (Vec<[f64; 3]>, Vec<(u32, f64, f64)>);
+    let per_face: Vec<Option<FaceBlock>> = (0..faces as u32)
         .into_par_iter()
         .map(|f| {
             let mut pts = Vec::new();
@@ -210,7 +211,7 @@ fn project(tess: &Tess, eval: TriEval, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
         let (a11, a12, a22) = (dot(s.du, s.du), dot(s.du, s.dv), dot(s.dv, s.dv));
         let (b1, b2) = (-dot(s.du, r), -dot(s.dv, r));
         let det = a11 * a22 - a12 * a12;
-        if !(det > 0.0) {
+        if det.is_nan() || det <= 0.0 {
             break;
         }
         let (du, dv) = ((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det);
