@@ -63,6 +63,10 @@ pub struct ApproxError {
     pub normal_max_deg: f64,
     /// Mean of those angles.
     pub normal_mean_deg: f64,
+    /// Where on the approximation `max` was found: `(face, u, v)`.
+    pub max_at: (u32, f64, f64),
+    /// Where on the approximation `normal_max_deg` was found.
+    pub normal_max_at: (u32, f64, f64),
     /// Points drawn on each surface.
     pub samples: usize,
     /// The exact surface's bounding-box diagonal (the unit of the distances).
@@ -75,7 +79,8 @@ impl ApproxError {
         format!(
             "{{\"surface\":\"{}\",\"max\":{:e},\"mean\":{:e},\"rms\":{:e},\"max_reverse\":{:e},\
              \"mean_reverse\":{:e},\"rms_reverse\":{:e},\"normal_max_deg\":{:e},\
-             \"normal_mean_deg\":{:e},\"samples\":{},\"diagonal\":{:e}}}",
+             \"normal_mean_deg\":{:e},\"max_at\":[{},{},{}],\"normal_max_at\":[{},{},{}],\
+             \"samples\":{},\"diagonal\":{:e}}}",
             self.surface,
             self.max,
             self.mean,
@@ -85,6 +90,12 @@ impl ApproxError {
             self.rms_reverse,
             self.normal_max_deg,
             self.normal_mean_deg,
+            self.max_at.0,
+            self.max_at.1,
+            self.max_at.2,
+            self.normal_max_at.0,
+            self.normal_max_at.1,
+            self.normal_max_at.2,
             self.samples,
             self.diagonal
         )
@@ -224,55 +235,94 @@ fn project(tess: &Tess, eval: TriEval, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
     best
 }
 
-/// Distances (and normal angles, degrees) from `samples` area-uniform points of `src` to
-/// `dst`: `(max, mean, rms, normal max, normal mean)`, unscaled.
+/// Distances (and normal angles, degrees) from area-uniform points of one surface to another,
+/// unscaled, with where the largest of each was found.
+#[derive(Clone, Copy, Debug, Default)]
+struct OneWay {
+    max: f64,
+    max_at: (u32, f64, f64),
+    sum: f64,
+    sq: f64,
+    nmax: f64,
+    nmax_at: (u32, f64, f64),
+    nsum: f64,
+    count: usize,
+}
+
+impl OneWay {
+    fn add(&mut self, at: (u32, f64, f64), d: f64, ang: f64) {
+        if d > self.max {
+            self.max = d;
+            self.max_at = at;
+        }
+        if ang > self.nmax {
+            self.nmax = ang;
+            self.nmax_at = at;
+        }
+        self.sum += d;
+        self.sq += d * d;
+        self.nsum += ang;
+        self.count += 1;
+    }
+
+    fn merge(mut self, o: OneWay) -> OneWay {
+        if o.max > self.max {
+            self.max = o.max;
+            self.max_at = o.max_at;
+        }
+        if o.nmax > self.nmax {
+            self.nmax = o.nmax;
+            self.nmax_at = o.nmax_at;
+        }
+        self.sum += o.sum;
+        self.sq += o.sq;
+        self.nsum += o.nsum;
+        self.count += o.count;
+        self
+    }
+
+    fn mean(&self) -> f64 {
+        self.sum / self.count as f64
+    }
+
+    fn rms(&self) -> f64 {
+        (self.sq / self.count as f64).sqrt()
+    }
+}
+
+/// [`OneWay`] over `samples` area-uniform points of `src`, projected onto `dst`.
 fn one_way(
     src: (&Tess, TriEval),
     dst: (&Tess, TriEval),
     samples: usize,
     seed: u64,
-) -> Result<(f64, f64, f64, f64, f64)> {
+) -> Result<OneWay> {
     const CHUNK: usize = 1024;
     let chunks = samples.div_ceil(CHUNK);
-    let parts: Vec<(f64, f64, f64, f64, f64, usize)> = (0..chunks)
+    let total = (0..chunks)
         .into_par_iter()
         .map(|c| {
             let mut rng = SplitMix64::new(seed ^ (c as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
             let n = CHUNK.min(samples - c * CHUNK);
-            let mut acc = (0.0f64, 0.0, 0.0, 0.0f64, 0.0, 0);
+            let mut acc = OneWay::default();
             for _ in 0..n {
-                let (f, u, v) = src.0.draw(&mut rng);
-                let Some(s) = (src.1)(f, u, v) else { continue };
+                let at = src.0.draw(&mut rng);
+                let Some(s) = (src.1)(at.0, at.1, at.2) else {
+                    continue;
+                };
                 let Some((d, nd)) = project(dst.0, dst.1, s.p) else {
                     continue;
                 };
                 let ns = normalize(cross(s.du, s.dv));
-                let ang = norm(cross(ns, nd)).atan2(dot(ns, nd)).to_degrees();
-                acc.0 = acc.0.max(d);
-                acc.1 += d;
-                acc.2 += d * d;
-                acc.3 = acc.3.max(ang);
-                acc.4 += ang;
-                acc.5 += 1;
+                acc.add(at, d, norm(cross(ns, nd)).atan2(dot(ns, nd)).to_degrees());
             }
             acc
         })
-        .collect();
-    let (mut max, mut sum, mut sq, mut nmax, mut nsum, mut count) =
-        (0.0f64, 0.0, 0.0, 0.0f64, 0.0, 0);
-    for p in parts {
-        max = max.max(p.0);
-        sum += p.1;
-        sq += p.2;
-        nmax = nmax.max(p.3);
-        nsum += p.4;
-        count += p.5;
-    }
-    if count == 0 {
+        .reduce(OneWay::default, OneWay::merge);
+    if total.count == 0 {
         return Err(Error::new(ErrorKind::Usage, "no sample could be measured"));
     }
-    let n = count as f64;
-    Ok((max, sum / n, (sq / n).sqrt(), nmax, nsum / n))
+    Ok(total)
 }
 
 /// The exact surface prepared once for measuring several approximations of it: its
@@ -324,14 +374,16 @@ impl<'a> Reference<'a> {
         let rel = |x: f64| if diagonal > 0.0 { x / diagonal } else { x };
         Ok(ApproxError {
             surface: approx.kind(),
-            max: rel(fwd.0),
-            mean: rel(fwd.1),
-            rms: rel(fwd.2),
-            max_reverse: rel(rev.0),
-            mean_reverse: rel(rev.1),
-            rms_reverse: rel(rev.2),
-            normal_max_deg: fwd.3,
-            normal_mean_deg: fwd.4,
+            max: rel(fwd.max),
+            mean: rel(fwd.mean()),
+            rms: rel(fwd.rms()),
+            max_reverse: rel(rev.max),
+            mean_reverse: rel(rev.mean()),
+            rms_reverse: rel(rev.rms()),
+            normal_max_deg: fwd.nmax,
+            normal_mean_deg: fwd.nsum / fwd.count as f64,
+            max_at: fwd.max_at,
+            normal_max_at: fwd.nmax_at,
             samples: opts.samples,
             diagonal,
         })

@@ -167,6 +167,36 @@ pub fn triangulated(m: &ControlMesh) -> ControlMesh {
     out
 }
 
+/// A closed triangle spindle whose two poles have valence `n` (3 or more): three rings of `n`
+/// vertices between them (the middle one twisted by half a step and rippled), so the rings'
+/// vertices have valence 5 to 7. For measuring approximations around poles of any valence.
+pub fn spindle(n: usize) -> ControlMesh {
+    assert!(n >= 3, "a spindle's poles need valence 3 or more");
+    let tau = std::f64::consts::TAU;
+    let mut p = vec![[0.0, 0.0, 1.6], [0.0, 0.0, -1.4]];
+    let rings = [(0.9, 0.85, 0.0), (0.0, 1.1, 0.5), (-0.9, 0.8, 0.0)];
+    for (z, r, twist) in rings {
+        for k in 0..n {
+            let a = tau * (k as f64 + twist) / n as f64;
+            let r = r * (1.0 + 0.12 * (2.0 * a).sin());
+            p.push([r * a.cos(), r * a.sin(), z + 0.08 * (3.0 * a).cos()]);
+        }
+    }
+    let ring = |i: usize, k: usize| (2 + i * n + k % n) as u32;
+    let mut faces: Vec<Vec<u32>> = Vec::new();
+    for k in 0..n {
+        faces.push(vec![0, ring(0, k), ring(0, k + 1)]);
+        faces.push(vec![1, ring(2, k + 1), ring(2, k)]);
+        for i in 0..2 {
+            let (a, b) = (ring(i, k), ring(i, k + 1));
+            let (c, d) = (ring(i + 1, k), ring(i + 1, k + 1));
+            faces.push(vec![a, c, d]);
+            faces.push(vec![a, d, b]);
+        }
+    }
+    mesh(p, &faces, Vec::new())
+}
+
 /// A smooth organic blob: a geodesic sphere (12 valence-5 and many valence-6 vertices; as a
 /// Catmull-Clark control mesh of triangles each face also gets a valence-3 centre) pulled
 /// out into five rounded lobes of different lengths and gently rippled. No tags.
