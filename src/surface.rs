@@ -59,6 +59,10 @@ pub struct SurfaceOptions {
     pub max_level: usize,
     /// Single-crease patches (paper 000) for faces with one semi-sharp crease.
     pub single_crease: bool,
+    /// Subdivision scheme override (the mesh's own, Catmull-Clark unless set, otherwise).
+    pub scheme: Option<crate::mesh::Scheme>,
+    /// The surface of a Loop mesh: exact, or one of paper 002's approximations.
+    pub surface: crate::patch::approx::Approximation,
 }
 
 impl Default for SurfaceOptions {
@@ -68,6 +72,8 @@ impl Default for SurfaceOptions {
             boundary: None,
             max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
             single_crease: true,
+            scheme: None,
+            surface: crate::patch::approx::Approximation::Exact,
         }
     }
 }
@@ -93,13 +99,16 @@ impl Surface {
         if let Some(b) = options.boundary {
             rules.boundary = b;
         }
+        if let Some(scheme) = options.scheme {
+            rules.scheme = scheme;
+        }
         let table = PatchTable::with_options(
             &mesh,
             rules,
             PatchOptions {
                 max_level: options.max_level,
                 single_crease: options.single_crease,
-                ..PatchOptions::default()
+                surface: options.surface,
             },
         )?;
         let warnings = mesh.warnings.iter().map(|w| w.to_string()).collect();
@@ -157,6 +166,13 @@ impl Surface {
     /// surface: a hole, or `at` outside the domain (see [`Self::try_eval`] for the reason).
     pub fn eval(&self, at: FaceCoord) -> Option<Sample> {
         self.table.eval(at).ok()
+    }
+
+    /// Under the Loop scheme, the surface at `(face, 0, u, v)` in OpenSubdiv's triangle
+    /// parameter (as `limitray eval --scheme loop`); [`Self::eval`] takes the three sub-quad
+    /// domains each triangle is diced as (and its hits report), like an n-gon's sub-faces.
+    pub fn eval_triangle(&self, at: FaceCoord) -> Result<Sample> {
+        self.table.eval_triangle(at)
     }
 
     /// [`Self::eval`] with the reason when there is no surface at `at`.

@@ -646,7 +646,10 @@ fn approximations_through_the_cli() {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
     assert_eq!(lines.len(), 3);
-    let names: Vec<&str> = lines.iter().map(|l| l["surface"].as_str().unwrap()).collect();
+    let names: Vec<&str> = lines
+        .iter()
+        .map(|l| l["surface"].as_str().unwrap())
+        .collect();
     assert_eq!(names, ["pn", "wm", "gregory"]);
     for l in &lines {
         for key in ["max", "mean", "rms", "max_reverse", "normal_max_deg"] {
@@ -655,7 +658,10 @@ fn approximations_through_the_cli() {
         }
         // On the blob every approximation stays within 1% of the diagonal (measured ≤ 3.6e-3)
         // and its mean is far below its maximum.
-        assert!(l["max"].as_f64().unwrap() < 1e-2 && l["mean"].as_f64().unwrap() < 1e-3, "{l}");
+        assert!(
+            l["max"].as_f64().unwrap() < 1e-2 && l["mean"].as_f64().unwrap() < 1e-3,
+            "{l}"
+        );
     }
     let max = |i: usize| lines[i]["max"].as_f64().unwrap();
     assert!(max(2) < max(0), "Gregory {} vs PN {}", max(2), max(0));
@@ -676,7 +682,15 @@ fn approximations_through_the_cli() {
     let count = |surface: &str| {
         let out = dir.path(&format!("blob_{surface}.obj"));
         let o = limitray(&[
-            &"dice", &blob, &"--scheme", &"loop", &"--surface", &surface, &"--rate", &"2", &"-o",
+            &"dice",
+            &blob,
+            &"--scheme",
+            &"loop",
+            &"--surface",
+            &surface,
+            &"--rate",
+            &"2",
+            &"-o",
             &out,
         ]);
         assert_success(&o, "dice --surface");
@@ -699,5 +713,8 @@ fn approximations_through_the_cli() {
     let png = dir.path("s.exr");
     let o = limitray(&[&"render", &scene, &"-o", &png]);
     let err = assert_exit_2(&o, "render with surface on a Catmull-Clark mesh");
-    assert!(err.contains("s.toml:") && err.contains("scheme = \"loop\""), "{err}");
+    assert!(
+        err.contains("s.toml:") && err.contains("scheme = \"loop\""),
+        "{err}"
+    );
 }

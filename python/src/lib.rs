@@ -10,8 +10,9 @@ use limitray::grid::GridMesh;
 use limitray::dice::{dice, DiceOptions, DiceRate};
 use limitray::error::{Error, ErrorKind};
 use limitray::mesh::obj::read_obj;
-use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
-use limitray::patch::{PatchOptions, PatchTable};
+use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options, Scheme};
+use limitray::patch::approx::Approximation;
+use limitray::patch::{LoopSurface, PatchOptions, PatchTable};
 use limitray::refine::Refiner;
 use limitray::exact::{ExactTrace, ExactTracer};
 use limitray::FaceCoord;
@@ -136,7 +137,8 @@ fn check_rate(rate: u32) -> PyResult<()> {
 impl Surface {
     /// Reads an OBJ file (with OpenSubdiv tags) and builds the patch table.
     #[new]
-    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false))]
+    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false, surface="exact"))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         path: std::path::PathBuf,
@@ -145,21 +147,29 @@ impl Surface {
         boundary: Option<&str>,
         max_level: usize,
         smooth_triangles: bool,
+        surface: &str,
     ) -> PyResult<Surface> {
-        if scheme != "catmark" {
-            return Err(usage(format!(
-                "scheme '{scheme}' is not supported (limitray subdivides with 'catmark' only)"
-            )));
-        }
+        let scheme = match scheme {
+            "catmark" => Scheme::Catmark,
+            "loop" => Scheme::Loop,
+            other => {
+                return Err(usage(format!(
+                    "scheme '{other}' is not one of 'catmark', 'loop'"
+                )))
+            }
+        };
+        let surface: Approximation = surface.parse().map_err(py_err)?;
         let boundary = boundary.map(str::to_owned);
         py.detach(move || -> PyResult<Surface> {
             let mesh = read_obj(Path::new(&path)).map_err(py_err)?;
-            let options = options_for(&mesh, chaikin, boundary.as_deref(), smooth_triangles)?;
+            let mut options = options_for(&mesh, chaikin, boundary.as_deref(), smooth_triangles)?;
+            options.scheme = scheme;
             let table = PatchTable::with_options(
                 &mesh,
                 options,
                 PatchOptions {
                     max_level,
+                    surface,
                     ..PatchOptions::default()
                 },
             )
@@ -238,10 +248,13 @@ impl Surface {
                         if u[i].is_finite() { v[i] } else { u[i] }
                     )));
                 }
-                let s = self
-                    .table
-                    .eval(FaceCoord::new(f, kk, u[i], v[i]))
-                    .map_err(|e| usage(format!("sample {i}: {e}")))?;
+                let at = FaceCoord::new(f, kk, u[i], v[i]);
+                let s = if self.options.scheme == Scheme::Loop {
+                    self.table.eval_triangle(at)
+                } else {
+                    self.table.eval(at)
+                }
+                .map_err(|e| usage(format!("sample {i}: {e}")))?;
                 out.extend_from_slice(&s.p);
                 out.extend_from_slice(&s.du);
                 out.extend_from_slice(&s.dv);
@@ -306,6 +319,13 @@ impl Surface {
             for h in bvh.intersect_batch(&rays) {
                 match h {
                     None => out.miss(),
+                    // A Loop triangle is diced as three sub-quads: its hits report the
+                    // triangle's own (u, v) and k = 0, as `limitray trace` does.
+                    Some(h) if self.options.scheme == Scheme::Loop => {
+                        let ([u, v], _) =
+                            LoopSurface::sub_quad_uv(h.k as usize, h.u as f64, h.v as f64);
+                        out.push(h.t as f64, h.face, 0, u, v, h.ns.map(|c| c as f64))
+                    }
                     Some(h) => out.push(
                         h.t as f64,
                         h.face,
@@ -355,8 +375,16 @@ impl Surface {
             let mut pos = r.refine_positions(&self.mesh.positions, level);
             let lvl = &r.levels[level];
             if limit {
-                pos =
-                    limitray::refine::limit::limit_positions(lvl, &pos, self.options.crease_method);
+                pos = match self.table.loop_surface() {
+                    Some(loop_surface) => loop_surface
+                        .limit_positions(lvl, level, &pos)
+                        .map_err(py_err)?,
+                    None => limitray::refine::limit::limit_positions(
+                        lvl,
+                        &pos,
+                        self.options.crease_method,
+                    ),
+                };
             }
             let mut offsets = vec![0i64];
             let mut verts = Vec::new();

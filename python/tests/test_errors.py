@@ -71,8 +71,8 @@ def test_a_hole_is_an_error_with_the_cli_message(cli, meshes):
 
 def test_bad_arguments(meshes):
     path = meshes["cube"]
-    with pytest.raises(ValueError, match="scheme 'loop' is not supported"):
-        limitray.Surface(path, scheme="loop")
+    with pytest.raises(ValueError, match="scheme 'bilinear' is not one of"):
+        limitray.Surface(path, scheme="bilinear")
     with pytest.raises(ValueError, match="boundary 'sharp' is not one of"):
         limitray.Surface(path, boundary="sharp")
     s = limitray.Surface(path)

@@ -2,11 +2,11 @@
 //! Under `--scheme loop` every face is one triangle and `u v` is OpenSubdiv's triangle
 //! parameter (`u, v ≥ 0`, `u + v ≤ 1`).
 
-use super::args::{load, RuleArgs};
+use super::args::{load, RuleArgs, SurfaceArg};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::Scheme;
-use crate::patch::{LoopSurface, PatchOptions, PatchTable, Sample};
+use crate::patch::{PatchOptions, PatchTable, Sample};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
@@ -20,6 +20,9 @@ pub struct EvalCmd {
     /// Maximum isolation level of the patch table.
     #[arg(long, default_value_t = crate::patch::table::DEFAULT_MAX_LEVEL)]
     pub max_level: usize,
+    /// The surface of a Loop mesh: exact, or paper 002's pn, wm or gregory approximation.
+    #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
+    pub surface: SurfaceArg,
 }
 
 /// Runs `limitray eval` on standard input and output.
@@ -27,18 +30,18 @@ pub fn run_cmd(args: &EvalCmd) -> Result<()> {
     let m = load(&args.mesh)?;
     let options = args.rules.options(&m);
     let (stdin, stdout) = (std::io::stdin().lock(), std::io::stdout().lock());
-    if options.scheme == Scheme::Loop {
-        let surface = LoopSurface::new(&m, options)?;
-        return run(|at| surface.eval(at), stdin, stdout);
-    }
     let table = PatchTable::with_options(
         &m,
         options,
         PatchOptions {
             max_level: args.max_level,
+            surface: args.surface.into(),
             ..PatchOptions::default()
         },
     )?;
+    if options.scheme == Scheme::Loop {
+        return run(|at| table.eval_triangle(at), stdin, stdout);
+    }
     run(|at| table.eval(at), stdin, stdout)
 }
 

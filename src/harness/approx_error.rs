@@ -423,11 +423,12 @@ mod tests {
             tessellate(1, 4, &pb).unwrap(),
         );
         let same = one_way((&ta, &a), (&ta, &a), 2000, 3).unwrap();
-        assert!(same.0 < 1e-15 && same.3 < 1e-9, "{same:?}");
+        assert!(same.max < 1e-15 && same.nmax < 1e-9, "{same:?}");
         let off = one_way((&ta, &a), (&tb, &b), 2000, 3).unwrap();
         assert!(
-            (off.0 - 0.01).abs() < 1e-15 && (off.1 - 0.01).abs() < 1e-15,
+            (off.max - 0.01).abs() < 1e-15 && (off.mean() - 0.01).abs() < 1e-15,
             "{off:?}"
         );
+        assert_eq!(off.count, 2000);
     }
 }

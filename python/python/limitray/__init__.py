@@ -50,17 +50,21 @@ def _floats(name, x, dtype, shape=None):
 class Surface:
     """The exact limit surface of a control mesh read from an OBJ file (OpenSubdiv tags).
 
-    ``scheme`` must be ``"catmark"``; ``chaikin`` selects Chaikin's crease rule; ``boundary`` is
+    ``scheme`` is ``"catmark"`` or ``"loop"`` (triangles only; then ``eval``'s and
+    ``trace``'s ``(u, v)`` are OpenSubdiv's triangle parameter and ``k`` is 0, as in
+    ``limitray eval --scheme loop``); ``chaikin`` selects Chaikin's crease rule; ``boundary`` is
     ``None`` (the mesh's tag, else edge-and-corner), ``"none"``, ``"edge"`` or ``"corner"``;
     ``max_level`` is the patch table's maximum isolation level; ``smooth_triangles`` selects
-    OpenSubdiv's smooth-triangle rule (as the mesh's ``t smoothtriangles`` tag does). The mesh
-    reader's warnings are issued as Python warnings and kept in ``warnings``.
+    OpenSubdiv's smooth-triangle rule (as the mesh's ``t smoothtriangles`` tag does);
+    ``surface`` replaces a Loop mesh's exact limit surface by paper 002's ``"pn"``, ``"wm"`` or
+    ``"gregory"`` approximation (``--surface``). The mesh reader's warnings are issued as
+    Python warnings and kept in ``warnings``.
     """
 
     def __init__(self, path, scheme="catmark", chaikin=False, boundary=None,
-                 max_level=DEFAULT_MAX_LEVEL, smooth_triangles=False):
+                 max_level=DEFAULT_MAX_LEVEL, smooth_triangles=False, surface="exact"):
         self._s = _limitray.Surface(str(path), scheme, bool(chaikin), boundary, int(max_level),
-                                    bool(smooth_triangles))
+                                    bool(smooth_triangles), str(surface))
         self.path = str(path)
         for w in self._s.warnings:
             _warnings.warn(w, stacklevel=2)

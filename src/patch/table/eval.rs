@@ -78,6 +78,22 @@ impl PatchTable {
         }
     }
 
+    /// Under the Loop scheme, the surface (exact or approximate) at `(face, 0, u, v)` in
+    /// OpenSubdiv's triangle parameter, as `limitray eval` reads it; [`Self::eval`] takes
+    /// the sub-quad domains dicing uses instead. An error for Catmull-Clark tables.
+    pub fn eval_triangle(&self, at: FaceCoord) -> Result<Sample> {
+        if let Some(approx) = &self.approx {
+            return approx.eval(at);
+        }
+        match &self.loop_surface {
+            Some(surface) => surface.eval(at),
+            None => Err(Error::new(
+                ErrorKind::Usage,
+                "the triangle parameter belongs to Loop surfaces; this one is Catmull-Clark",
+            )),
+        }
+    }
+
     /// The subdivision level of the patch at `at`: [`Sample::level`] of [`Self::eval`], found
     /// by the quadtree lookup alone where the leaf is a B-spline or single-crease patch (whose
     /// level is its own), by evaluation elsewhere (end caps and Stam patches report how deep
