@@ -213,27 +213,9 @@ impl LoopSurface {
     }
 
     fn eval_with(&self, at: FaceCoord, derivatives: bool) -> Result<Sample> {
-        let f = at.face as usize;
+        check_triangle_coord(at, self.num_faces())?;
+        let (f, u, v) = (at.face as usize, at.u, at.v);
         let bad = |m: String| Err(Error::new(ErrorKind::Usage, m));
-        if f >= self.num_faces() {
-            return bad(format!(
-                "face {} is out of range ({} faces)",
-                at.face,
-                self.num_faces()
-            ));
-        }
-        if at.k != 0 {
-            return bad(format!(
-                "face {}: a triangle has no sub-face {}",
-                at.face, at.k
-            ));
-        }
-        let (u, v) = (at.u, at.v);
-        if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-12) {
-            return bad(format!(
-                "({u}, {v}) is outside the triangle u, v ≥ 0, u + v ≤ 1"
-            ));
-        }
         // The tree: regular leaves directly, caps by on-demand descent.
         let (mut u, mut v) = (u.max(0.0), v.max(0.0));
         let mut node = self.tree(f);
@@ -477,6 +459,28 @@ impl LoopSurface {
         };
         sample([p, du, dv, [0.0; 3], [0.0; 3], [0.0; 3]], scale, depth)
     }
+}
+
+/// Checks `at` as a point of a triangle surface of `faces` faces: `k` = 0, `u, v ≥ 0`,
+/// `u + v ≤ 1` (to 1e-12).
+pub fn check_triangle_coord(at: FaceCoord, faces: usize) -> Result<()> {
+    let bad = |m: String| Err(Error::new(ErrorKind::Usage, m));
+    if at.face as usize >= faces {
+        return bad(format!("face {} is out of range ({faces} faces)", at.face));
+    }
+    if at.k != 0 {
+        return bad(format!(
+            "face {}: a triangle has no sub-face {}",
+            at.face, at.k
+        ));
+    }
+    let (u, v) = (at.u, at.v);
+    if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-12) {
+        return bad(format!(
+            "({u}, {v}) is outside the triangle u, v ≥ 0, u + v ≤ 1"
+        ));
+    }
+    Ok(())
 }
 
 /// A triangle surface `eval(u, v)` (OpenSubdiv's triangle parameter) evaluated at the

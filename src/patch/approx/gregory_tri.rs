@@ -165,18 +165,6 @@ impl GregoryTri {
         }
         out
     }
-
-    /// The patch's points as one list (corners, `e⁺`, `e⁻`, `f⁺`, `f⁻`): what bounds it.
-    pub fn points(&self) -> [[f64; 3]; 15] {
-        let mut out = [[0.0; 3]; 15];
-        for (k, part) in [self.p, self.e_plus, self.e_minus, self.f_plus, self.f_minus]
-            .iter()
-            .enumerate()
-        {
-            out[3 * k..3 * k + 3].copy_from_slice(part);
-        }
-        out
-    }
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ pub use gregory_tri::GregoryTri;
 
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
-use crate::patch::loop_surface::eval_sub_quad;
+use crate::patch::loop_surface::{check_triangle_coord, eval_sub_quad};
 use crate::patch::{LoopSurface, Sample};
 
 /// Which surface a mesh stands for: the exact limit surface or one of the approximations.
@@ -128,29 +128,13 @@ impl TriApprox {
 
     /// Position and derivatives at `(face, 0, u, v)` in OpenSubdiv's triangle parameter.
     pub fn eval(&self, at: FaceCoord) -> Result<Sample> {
-        let bad = |m: String| Err(Error::new(ErrorKind::Usage, m));
-        let f = at.face as usize;
-        if f >= self.patches.len() {
-            return bad(format!(
-                "face {} is out of range ({} faces)",
-                at.face,
-                self.patches.len()
-            ));
-        }
-        if at.k != 0 {
-            return bad(format!(
-                "face {}: a triangle has no sub-face {}",
-                at.face, at.k
-            ));
-        }
-        let (u, v) = (at.u, at.v);
-        if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-12) {
-            return bad(format!(
-                "({u}, {v}) is outside the triangle u, v ≥ 0, u + v ≤ 1"
-            ));
-        }
+        check_triangle_coord(at, self.patches.len())?;
+        let (f, u, v) = (at.face as usize, at.u, at.v);
         let Some(p) = &self.patches[f] else {
-            return bad(format!("face {} is a hole", at.face));
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!("face {} is a hole", at.face),
+            ));
         };
         let r = p.eval(u, v.min(1.0 - u));
         Ok(Sample {
