@@ -72,10 +72,10 @@ def test_loop_errors_are_the_cli(cli, meshes):
         limitray.Surface(meshes["cube"], scheme="loop")
     assert "triangles" in str(e.value)
     with pytest.raises(ValueError, match="approximates Loop meshes"):
-        limitray.Surface(BLOB, surface="gregory")
+        limitray.Surface(BLOB, surface="pn")
     with pytest.raises(ValueError, match="unknown surface 'bezier'|unknown surface `bezier`"):
         limitray.Surface(BLOB, scheme="loop", surface="bezier")
     with pytest.raises(ValueError, match="scheme 'bilinear' is not one of"):
         limitray.Surface(BLOB, scheme="bilinear")
-    proc = cli(["dice", BLOB, "--surface", "gregory", "-o", "-"])
+    proc = cli(["dice", BLOB, "--surface", "wm", "-o", "-"])
     assert "approximates Loop meshes" in cli_error(proc)

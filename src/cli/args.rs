@@ -59,7 +59,7 @@ pub enum SurfaceArg {
     Pn,
     /// Walton-Meek G1 triangles from boundary data.
     Wm,
-    /// Paper 002's G1 Gregory triangles from limit tangents and cross tangents.
+    /// Paper 002's G1 Gregory triangles (Loop); paper 004's Gregory patches (Catmull-Clark).
     Gregory,
 }
 
@@ -166,7 +166,8 @@ pub struct DiceArgs {
     /// Maximum isolation level of the patch table.
     #[arg(long, default_value_t = crate::patch::table::DEFAULT_MAX_LEVEL)]
     pub max_level: usize,
-    /// The surface of a Loop mesh: exact, or paper 002's pn, wm or gregory approximation.
+    /// The surface: exact, or paper 002's pn, wm or gregory approximation of a Loop mesh
+    /// (gregory on a Catmull-Clark mesh: paper 004's Gregory patches).
     #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
     pub surface: SurfaceArg,
 }

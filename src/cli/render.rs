@@ -57,8 +57,9 @@ pub struct RenderArgs {
     /// No progress bar and no summary on stderr.
     #[arg(long)]
     pub quiet: bool,
-    /// The surface of every Loop mesh in the scene (overrides its `surface` key): exact, or
-    /// paper 002's pn, wm or gregory approximation. Catmull-Clark meshes stay exact.
+    /// The surface of the scene's meshes (overrides their `surface` key): exact, or paper
+    /// 002's pn, wm or gregory approximation of Loop meshes; exact and gregory (paper 004's
+    /// Gregory patches) apply to Catmull-Clark meshes too.
     #[arg(long, value_enum)]
     pub surface: Option<super::args::SurfaceArg>,
 }
@@ -131,12 +132,18 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
     let mut levels_out = args.levels_png.as_deref().map(Output::create).transpose()?;
     let mut desc = read_scene(&args.scene)?;
     if let Some(s) = args.surface {
+        let s: crate::patch::approx::Approximation = s.into();
+        let catmark_too = matches!(
+            s,
+            crate::patch::approx::Approximation::Exact
+                | crate::patch::approx::Approximation::Gregory
+        );
         for m in desc
             .meshes
             .iter_mut()
-            .filter(|m| m.scheme == crate::mesh::Scheme::Loop)
+            .filter(|m| catmark_too || m.scheme == crate::mesh::Scheme::Loop)
         {
-            m.surface = s.into();
+            m.surface = s;
         }
     }
     let mut settings = desc.render;

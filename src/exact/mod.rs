@@ -246,6 +246,13 @@ impl ExactTracer {
     /// `mesh` and `options` are the control mesh and rules the table was built from (for the
     /// diagonal and the infinitely sharp features).
     pub fn new(table: Arc<PatchTable>, mesh: &ControlMesh) -> Result<ExactTracer> {
+        if table.is_approximate() {
+            return Err(crate::error::Error::new(
+                crate::error::ErrorKind::Usage,
+                "the reference intersector (--exact) traces the exact limit surface, not an \
+                 approximation (--surface)",
+            ));
+        }
         if table.loop_surface().is_some() {
             return Err(crate::error::Error::new(
                 crate::error::ErrorKind::Usage,

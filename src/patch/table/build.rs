@@ -8,7 +8,7 @@ use super::tree::{Frame, Node};
 use super::{Patch, PatchKind, PatchOptions, PatchStats, PatchTable, MAX_LEVEL};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
-use crate::patch::approx::{Approximation, TriApprox};
+use crate::patch::approx::{Approximation, QuadApprox, TriApprox};
 use crate::patch::local::{child_face, extract_faces};
 use crate::patch::regular::{classify, RegularKind};
 use crate::patch::stam;
@@ -215,12 +215,14 @@ impl PatchTable {
             max_level: opts.max_level.max(1),
             surface: opts.surface,
         };
-        if opts.surface != Approximation::Exact && options.scheme != Scheme::Loop {
+        if matches!(opts.surface, Approximation::Pn | Approximation::Wm)
+            && options.scheme != Scheme::Loop
+        {
             return Err(Error::new(
                 ErrorKind::Usage,
                 format!(
-                    "surface `{}` approximates Loop meshes (paper 002); a Catmull-Clark mesh's \
-                     surface is exact",
+                    "surface `{}` approximates Loop meshes (paper 002); a Catmull-Clark mesh \
+                     takes `exact` or `gregory` (paper 004's Gregory patches)",
                     opts.surface
                 ),
             ));
@@ -246,6 +248,7 @@ impl PatchTable {
             stats: PatchStats::default(),
             loop_surface: None,
             approx: None,
+            quad_approx: None,
         };
         if options.scheme == Scheme::Loop {
             // A Loop mesh's surface is its own evaluator; each triangle is three sub-quads
@@ -332,6 +335,9 @@ impl PatchTable {
         table.children = Vec::new();
         table.node_info = Vec::new();
         table.set_positions(&mesh.positions);
+        if opts.surface == Approximation::Gregory {
+            table.quad_approx = Some(std::sync::Arc::new(QuadApprox::new(mesh, options, &table)?));
+        }
         Ok(table)
     }
 
@@ -359,5 +365,11 @@ impl PatchTable {
             all.extend_from_slice(&child);
         }
         self.points = self.point_stencils.apply_points(&all);
+        if let Some(q) = self.quad_approx.take() {
+            match q.with_positions(base, self) {
+                Ok(a) => self.quad_approx = Some(std::sync::Arc::new(a)),
+                Err(e) => panic!("PatchTable::set_positions: {e}"),
+            }
+        }
     }
 }

@@ -39,6 +39,9 @@ impl PatchTable {
                 format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
             ));
         }
+        if let Some(q) = &self.quad_approx {
+            return q.eval(at);
+        }
         let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
         let mut frame = Frame::UNIT;
         let (mut s, mut t) = (u, v);

@@ -44,8 +44,9 @@ pub struct PatchOptions {
     /// Use single-crease patches (paper 000) for regular faces with one semi-sharp crease
     /// (uniform crease rule only); otherwise such faces are refined like other features.
     pub single_crease: bool,
-    /// The surface a Loop mesh stands for: exact, or one of paper 002's approximations
-    /// ([`crate::patch::approx`]); Catmull-Clark meshes are always exact.
+    /// The surface the mesh stands for: exact, one of paper 002's approximations of a Loop
+    /// surface, or (`Gregory` on a Catmull-Clark mesh) paper 004's Gregory patches
+    /// ([`crate::patch::approx`]).
     pub surface: crate::patch::approx::Approximation,
 }
 
@@ -180,6 +181,9 @@ pub struct PatchTable {
     /// Under the Loop scheme with an approximate surface, its patches: `eval` is
     /// [`crate::patch::approx::TriApprox::eval_sub_quad`].
     approx: Option<std::sync::Arc<crate::patch::approx::TriApprox>>,
+    /// Under Catmull-Clark with `--surface gregory`, paper 004's Gregory patches: `eval` is
+    /// [`crate::patch::approx::QuadApprox::eval`].
+    quad_approx: Option<std::sync::Arc<crate::patch::approx::QuadApprox>>,
 }
 
 /// A limit-surface sample.
@@ -228,6 +232,7 @@ impl PatchTable {
             .sum();
         self.loop_surface.as_ref().map_or(0, |s| s.bytes())
             + self.approx.as_ref().map_or(0, |s| s.bytes())
+            + self.quad_approx.as_ref().map_or(0, |s| s.bytes())
             + self.point_stencils.bytes()
             + self
                 .chain
@@ -248,9 +253,20 @@ impl PatchTable {
         self.loop_surface.as_deref()
     }
 
-    /// The approximate surface evaluated instead of the exact one, if any.
+    /// The approximate Loop surface evaluated instead of the exact one, if any.
     pub fn approx(&self) -> Option<&crate::patch::approx::TriApprox> {
         self.approx.as_deref()
+    }
+
+    /// The Gregory-patch approximation of a Catmull-Clark surface evaluated instead of the
+    /// exact one, if any.
+    pub fn quad_approx(&self) -> Option<&crate::patch::approx::QuadApprox> {
+        self.quad_approx.as_deref()
+    }
+
+    /// Whether `eval` answers with an approximation rather than the exact limit surface.
+    pub fn is_approximate(&self) -> bool {
+        self.approx.is_some() || self.quad_approx.is_some()
     }
 
     /// Number of sub-faces of base face `f` (1 for a quad, n for an n-gon; 3 for a Loop

@@ -101,8 +101,9 @@ pub struct MeshDesc {
     pub max_rate: u32,
     /// Subdivision scheme (`scheme = "catmark"` or `"loop"`; Catmull-Clark by default).
     pub scheme: crate::mesh::Scheme,
-    /// The surface of a Loop mesh (`surface = "exact"`, `"pn"`, `"wm"` or `"gregory"`:
-    /// paper 002's approximations; exact by default, and always for Catmull-Clark).
+    /// The surface of the mesh (`surface = "exact"`, or `"pn"`, `"wm"`, `"gregory"`: paper
+    /// 002's approximations of a Loop mesh; `"gregory"` on a Catmull-Clark mesh is paper 004's
+    /// Gregory patches).
     pub surface: crate::patch::approx::Approximation,
     /// Line of the entry in the scene file, for messages.
     pub line: usize,
@@ -353,14 +354,17 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
                     .get_ref()
                     .parse()
                     .map_err(|e: Error| src.err(s.span(), e.message))?;
-                if a != crate::patch::approx::Approximation::Exact
-                    && scheme != crate::mesh::Scheme::Loop
+                if matches!(
+                    a,
+                    crate::patch::approx::Approximation::Pn
+                        | crate::patch::approx::Approximation::Wm
+                ) && scheme != crate::mesh::Scheme::Loop
                 {
                     return Err(src.err(
                         s.span(),
                         format!(
                             "surface '{a}' approximates Loop meshes; add scheme = \"loop\" \
-                             (a Catmull-Clark mesh's surface is exact)"
+                             (a Catmull-Clark mesh takes \"exact\" or \"gregory\")"
                         ),
                     ));
                 }
