@@ -670,13 +670,28 @@ fn approximations_through_the_cli() {
     let o = limitray(&[&"approx-error", &blob, &"--surface", &"exact"]);
     assert_exit_2(&o, "approx-error --surface exact");
 
-    // Catmull-Clark meshes are always exact.
+    // PN and Walton-Meek approximate Loop surfaces only.
     let cube = dir.file("cube.obj", CUBE);
     let out = dir.path("never.obj");
     let o = limitray(&[&"dice", &cube, &"--surface", &"pn", &"-o", &out]);
     let err = assert_exit_2(&o, "dice --surface pn on Catmull-Clark");
     assert!(err.contains("Loop"), "{err}");
     assert!(!out.exists());
+    // A Catmull-Clark mesh takes paper 004's Gregory patches: the same triangles, other
+    // points; the reference intersector refuses an approximation.
+    let dice_cube = |surface: &str| {
+        let out = dir.path(&format!("cube_{surface}.obj"));
+        let o = limitray(&[&"dice", &cube, &"--surface", &surface, &"--rate", &"4", &"-o", &out]);
+        assert_success(&o, "dice a Catmull-Clark mesh --surface");
+        let text = std::fs::read_to_string(&out).unwrap();
+        (count_v_f(&text), points_of(&text))
+    };
+    let ((ce, pe), (cg, pg)) = (dice_cube("exact"), dice_cube("gregory"));
+    assert_eq!(ce, cg);
+    assert!(pe.iter().zip(&pg).any(|(a, b)| a != b));
+    let o = limitray(&[&"trace", &cube, &"--exact", &"--surface", &"gregory"]);
+    let err = assert_exit_2(&o, "trace --exact --surface gregory");
+    assert!(err.contains("approximation"), "{err}");
 
     // Dicing the approximation: same triangle count as the exact surface, different points.
     let count = |surface: &str| {

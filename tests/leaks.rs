@@ -194,6 +194,56 @@ fn corpus_closed_shapes_do_not_leak() {
     assert!(cases >= 200, "only {cases} cases");
 }
 
+/// Paper 004's Gregory patches of every closed Catmull-Clark corpus shape (`--surface
+/// gregory`), diced like the exact surface, at rates 1, 4 and 16, at the origin and far from
+/// it: 100k random rays per case plus the aimed ones.
+#[test]
+fn catmark_gregory_patches_do_not_leak() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mut cases = 0;
+    let mut rays = 0usize;
+    for path in common::catmark_files(&models) {
+        let Ok(mesh) = read_obj(&path) else { continue };
+        if !common::closed(&mesh) {
+            continue;
+        }
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        for rate in [1u32, 4, 16] {
+            let estimate = 2 * (rate as usize).pow(2) * mesh.num_faces();
+            if estimate > MAX_TRIANGLES {
+                continue;
+            }
+            for by in [[0.0; 3], FAR] {
+                let m = translated(&mesh, by);
+                let [lo, hi] = m.bounds();
+                let thinnest = (0..3).map(|a| hi[a] - lo[a]).fold(f64::INFINITY, f64::min);
+                let magnitude = lo.iter().chain(&hi).fold(0.0f64, |a, x| a.max(x.abs()));
+                if thinnest < 8.0 * magnitude * f32::EPSILON as f64 {
+                    continue;
+                }
+                let opts = PatchOptions {
+                    surface: Approximation::Gregory,
+                    ..PatchOptions::default()
+                };
+                let table = PatchTable::new(&m, opts).unwrap();
+                let (_, bvh) = build_from(table, &m, rate);
+                let cast = probe(
+                    &format!("{name} (Gregory patches) rate {rate} at {by:?}"),
+                    &bvh,
+                    mesh.diagonal(),
+                    100_000,
+                );
+                rays += cast;
+                cases += (cast > 0) as usize;
+            }
+        }
+    }
+    eprintln!("Catmull-Clark Gregory patches: {cases} cases, {rays} rays, 0 misses");
+    assert!(cases >= 100, "only {cases} cases");
+}
+
 /// The Loop scheme (issue 15): every closed loop shape of the corpus and the meshes of the
 /// bundled Loop scene under `Scheme::Loop`,
 /// each triangle diced as three sub-quads sharing its edges and spokes, at rates 1–64, at the
