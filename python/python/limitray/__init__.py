@@ -57,7 +57,8 @@ class Surface:
     ``max_level`` is the patch table's maximum isolation level; ``smooth_triangles`` selects
     OpenSubdiv's smooth-triangle rule (as the mesh's ``t smoothtriangles`` tag does);
     ``surface`` replaces a Loop mesh's exact limit surface by paper 002's ``"pn"``, ``"wm"`` or
-    ``"gregory"`` approximation (``--surface``). The mesh reader's warnings are issued as
+    ``"gregory"`` approximation, a Catmull-Clark mesh's by paper 004's Gregory patches
+    (``"gregory"``), as ``--surface`` does. The mesh reader's warnings are issued as
     Python warnings and kept in ``warnings``.
     """
 
