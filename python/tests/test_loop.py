@@ -79,3 +79,30 @@ def test_loop_errors_are_the_cli(cli, meshes):
         limitray.Surface(BLOB, scheme="bilinear")
     proc = cli(["dice", BLOB, "--surface", "wm", "-o", "-"])
     assert "approximates Loop meshes" in cli_error(proc)
+
+
+def test_catmark_gregory_is_the_cli(cli, meshes):
+    # Paper 004's Gregory patches of a Catmull-Clark mesh (pentagons, quads, a semi-sharp
+    # crease): eval and trace give the CLI's numbers.
+    path = meshes["prism"]
+    s = limitray.Surface(path, surface="gregory")
+    rng = np.random.default_rng(2)
+    n = 100
+    face = rng.integers(0, s.num_faces, n)
+    k = np.array([rng.integers(0, m) for m in s.sub_faces()[face]])
+    u, v = rng.uniform(0, 1, n), rng.uniform(0, 1, n)
+    out = s.eval(face, u, v, k=k)
+    stdin = "".join(f"{int(f)} {int(kk)} {float(a)!r} {float(b)!r}\n" for f, kk, a, b in zip(face, k, u, v))
+    proc = cli(["eval", path, "--surface", "gregory"], stdin)
+    assert proc.returncode == 0, proc.stderr
+    assert np.array_equal(rows(proc.stdout), np.hstack([out["p"], out["du"], out["dv"]]))
+    exact = limitray.Surface(path).eval(face, u, v, k=k)
+    # Close to the exact surface, not equal to it (the prism is coarse: within 5%).
+    gap = np.linalg.norm(out["p"] - exact["p"], axis=1)
+    assert 0 < gap.max() < 0.05 * 2.6
+    o = np.zeros((500, 3), dtype=np.float32)
+    d = rng.normal(size=(500, 3)).astype(np.float32)
+    h = s.trace(o, d, rate=4)
+    assert h["hit"].all()
+    with pytest.raises(ValueError, match="not an approximation"):
+        s.trace(o, d, exact=True)
