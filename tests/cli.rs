@@ -666,6 +666,27 @@ fn approximations_through_the_cli() {
     let max = |i: usize| lines[i]["max"].as_f64().unwrap();
     assert!(max(2) < max(0), "Gregory {} vs PN {}", max(2), max(0));
 
+    // Under Catmull-Clark the default is paper 004's Gregory patches alone.
+    let cube_mesh = dir.file("cube_ae.obj", CUBE);
+    let o = limitray(&[
+        &"approx-error",
+        &cube_mesh,
+        &"--scheme",
+        &"catmark",
+        &"--samples",
+        &"2000",
+        &"--json",
+    ]);
+    assert_success(&o, "approx-error --scheme catmark");
+    let l: Vec<serde_json::Value> = stdout(&o)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(l.len(), 1);
+    assert_eq!(l[0]["surface"], "gregory");
+    // The cube's patches stay within 1% of its diagonal (measured 2e-3).
+    assert!(l[0]["max"].as_f64().unwrap() < 1e-2, "{}", l[0]);
+
     // The exact surface is the reference, not an approximation to measure.
     let o = limitray(&[&"approx-error", &blob, &"--surface", &"exact"]);
     assert_exit_2(&o, "approx-error --surface exact");
@@ -681,7 +702,16 @@ fn approximations_through_the_cli() {
     // points; the reference intersector refuses an approximation.
     let dice_cube = |surface: &str| {
         let out = dir.path(&format!("cube_{surface}.obj"));
-        let o = limitray(&[&"dice", &cube, &"--surface", &surface, &"--rate", &"4", &"-o", &out]);
+        let o = limitray(&[
+            &"dice",
+            &cube,
+            &"--surface",
+            &surface,
+            &"--rate",
+            &"4",
+            &"-o",
+            &out,
+        ]);
         assert_success(&o, "dice a Catmull-Clark mesh --surface");
         let text = std::fs::read_to_string(&out).unwrap();
         (count_v_f(&text), points_of(&text))

@@ -1,29 +1,27 @@
-//! `limitray approx-error`: how far paper 002's approximations of a Loop surface are from the
-//! exact limit surface ([`crate::harness::approx_error`]), one line per surface.
+//! `limitray approx-error`: how far paper 002's approximations of a Loop surface (or paper
+//! 004's Gregory patches of a Catmull-Clark surface) are from the exact limit surface
+//! ([`crate::harness::approx_error`]), one line per surface.
 
 use super::args::{load, RuleArgs, SchemeArg, SurfaceArg, ThreadArgs};
 use crate::error::{Error, ErrorKind, Result};
 use crate::harness::approx_error::{ErrorOptions, Reference};
 use crate::mesh::Scheme;
-use crate::patch::approx::{Approximation, TriApprox};
-use crate::patch::LoopSurface;
+use crate::patch::approx::Approximation;
+use crate::patch::{PatchOptions, PatchTable};
 use std::path::PathBuf;
 
 /// Arguments of `approx-error`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ApproxErrorCmd {
-    /// OBJ control mesh (triangles).
+    /// OBJ control mesh.
     pub mesh: PathBuf,
-    /// Subdivision rules (the scheme defaults to loop here: the approximations are Loop's).
+    /// Subdivision rules (the scheme defaults to loop here: paper 002's approximations are
+    /// Loop's; `--scheme catmark` measures paper 004's Gregory patches).
     #[command(flatten)]
     pub rules: RuleArgs,
-    /// Surfaces to measure, comma-separated.
-    #[arg(
-        long,
-        value_enum,
-        value_delimiter = ',',
-        default_value = "pn,wm,gregory"
-    )]
+    /// Surfaces to measure, comma-separated (default pn,wm,gregory under Loop, gregory under
+    /// Catmull-Clark).
+    #[arg(long, value_enum, value_delimiter = ',')]
     pub surface: Vec<SurfaceArg>,
     /// Points drawn on each surface (each direction).
     #[arg(long, default_value_t = 100_000)]
@@ -57,14 +55,29 @@ pub fn run(args: &ApproxErrorCmd) -> Result<()> {
     let mut rules = args.rules.clone();
     rules.scheme.get_or_insert(SchemeArg::Loop);
     let options = rules.options(&mesh);
-    if options.scheme != Scheme::Loop {
+    let surfaces: Vec<Approximation> = match (args.surface.is_empty(), options.scheme) {
+        (false, _) => args.surface.iter().map(|&s| s.into()).collect(),
+        (true, Scheme::Loop) => vec![Approximation::Pn, Approximation::Wm, Approximation::Gregory],
+        (true, Scheme::Catmark) => vec![Approximation::Gregory],
+    };
+    if surfaces.contains(&Approximation::Exact) {
         return Err(Error::new(
             ErrorKind::Usage,
-            "approx-error measures paper 002's approximations of Loop surfaces: use --scheme loop",
+            "--surface lists approximations (pn, wm, gregory): the exact surface is the reference",
         ));
     }
     args.threads.pool()?.install(|| {
-        let exact = LoopSurface::new(&mesh, options)?;
+        let table = |surface| {
+            PatchTable::with_options(
+                &mesh,
+                options,
+                PatchOptions {
+                    surface,
+                    ..PatchOptions::default()
+                },
+            )
+        };
+        let exact = table(Approximation::Exact)?;
         let opts = ErrorOptions {
             samples: args.samples,
             seed: args.seed,
@@ -73,7 +86,7 @@ pub fn run(args: &ApproxErrorCmd) -> Result<()> {
         let reference = Reference::new(&exact, opts)?;
         if !args.json {
             println!(
-                "{}: {} triangles; distances relative to the bounding-box diagonal, {} points each way",
+                "{}: {} faces; distances relative to the bounding-box diagonal, {} points each way",
                 args.mesh.display(),
                 exact.num_faces(),
                 args.samples
@@ -83,16 +96,8 @@ pub fn run(args: &ApproxErrorCmd) -> Result<()> {
                 "surface", "max", "mean", "rms", "max_reverse", "normal_max_deg"
             );
         }
-        for &s in &args.surface {
-            let kind: Approximation = s.into();
-            if kind == Approximation::Exact {
-                return Err(Error::new(
-                    ErrorKind::Usage,
-                    "--surface lists approximations (pn, wm, gregory): the exact surface is the reference",
-                ));
-            }
-            let approx = TriApprox::new(&exact, kind)?;
-            let e = reference.measure(&approx)?;
+        for &kind in &surfaces {
+            let e = reference.measure(&table(kind)?)?;
             if args.json {
                 println!("{}", e.json());
             } else {

@@ -13,8 +13,8 @@ use super::closest::ClosestMesh;
 use super::rng::SplitMix64;
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
-use crate::patch::approx::{Approximation, TriApprox};
-use crate::patch::{LoopSurface, Sample};
+use crate::patch::approx::Approximation;
+use crate::patch::{PatchTable, Sample};
 use crate::vec3::{cross, dot, norm, normalize, sub};
 use rayon::prelude::*;
 
@@ -63,10 +63,10 @@ pub struct ApproxError {
     pub normal_max_deg: f64,
     /// Mean of those angles.
     pub normal_mean_deg: f64,
-    /// Where on the approximation `max` was found: `(face, u, v)`.
-    pub max_at: (u32, f64, f64),
+    /// Where on the approximation `max` was found.
+    pub max_at: FaceCoord,
     /// Where on the approximation `normal_max_deg` was found.
-    pub normal_max_at: (u32, f64, f64),
+    pub normal_max_at: FaceCoord,
     /// Points drawn on each surface.
     pub samples: usize,
     /// The exact surface's bounding-box diagonal (the unit of the distances).
@@ -79,7 +79,7 @@ impl ApproxError {
         format!(
             "{{\"surface\":\"{}\",\"max\":{:e},\"mean\":{:e},\"rms\":{:e},\"max_reverse\":{:e},\
              \"mean_reverse\":{:e},\"rms_reverse\":{:e},\"normal_max_deg\":{:e},\
-             \"normal_mean_deg\":{:e},\"max_at\":[{},{},{}],\"normal_max_at\":[{},{},{}],\
+             \"normal_mean_deg\":{:e},\"max_at\":[{},{},{},{}],\"normal_max_at\":[{},{},{},{}],\
              \"samples\":{},\"diagonal\":{:e}}}",
             self.surface,
             self.max,
@@ -90,62 +90,106 @@ impl ApproxError {
             self.rms_reverse,
             self.normal_max_deg,
             self.normal_mean_deg,
-            self.max_at.0,
-            self.max_at.1,
-            self.max_at.2,
-            self.normal_max_at.0,
-            self.normal_max_at.1,
-            self.normal_max_at.2,
+            self.max_at.face,
+            self.max_at.k,
+            self.max_at.u,
+            self.max_at.v,
+            self.normal_max_at.face,
+            self.normal_max_at.k,
+            self.normal_max_at.u,
+            self.normal_max_at.v,
             self.samples,
             self.diagonal
         )
     }
 }
 
-/// A surface given face by face in OpenSubdiv's triangle parameter (`None` in holes).
-type TriEval<'a> = &'a (dyn Fn(u32, f64, f64) -> Option<Sample> + Sync);
+/// A surface as a function of its domains' parameters (`None` in holes).
+type Eval<'a> = &'a (dyn Fn(FaceCoord) -> Option<Sample> + Sync);
 
 /// A surface's positions alone.
-type TriPos<'a> = &'a (dyn Fn(u32, f64, f64) -> Option<[f64; 3]> + Sync);
+type Pos<'a> = &'a (dyn Fn(FaceCoord) -> Option<[f64; 3]> + Sync);
 
-/// A tessellation of a triangle surface with each point's parameter.
+/// The shape of every parameter domain of a surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DomainShape {
+    /// OpenSubdiv's triangle parameter: `u, v ≥ 0`, `u + v ≤ 1` (Loop faces).
+    Triangle,
+    /// The unit square (Catmull-Clark faces and n-gon sub-faces).
+    Square,
+}
+
+impl DomainShape {
+    /// Keeps `(u, v)` in the domain.
+    fn clamp(self, mut u: f64, mut v: f64) -> (f64, f64) {
+        match self {
+            DomainShape::Square => (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)),
+            DomainShape::Triangle => {
+                if u + v > 1.0 {
+                    let e = 0.5 * (u + v - 1.0);
+                    u -= e;
+                    v -= e;
+                }
+                u = u.clamp(0.0, 1.0);
+                v = v.clamp(0.0, 1.0 - u);
+                (u, v)
+            }
+        }
+    }
+}
+
+/// A tessellation of a surface with each point's parameter.
 struct Tess {
     mesh: ClosestMesh,
-    params: Vec<(u32, f64, f64)>,
+    params: Vec<FaceCoord>,
+    shape: DomainShape,
     /// Cumulative triangle areas.
     cdf: Vec<f64>,
 }
 
-fn tessellate(faces: usize, n: usize, eval: TriPos) -> Result<Tess> {
-    type FaceBlock = (Vec<[f64; 3]>, Vec<(u32, f64, f64)>);
-    let per_face: Vec<Option<FaceBlock>> = (0..faces as u32)
-        .into_par_iter()
-        .map(|f| {
+/// `n` segments per domain edge over every domain `(face, k)` of `domains`.
+fn tessellate(domains: &[(u32, u32)], shape: DomainShape, n: usize, eval: Pos) -> Result<Tess> {
+    type Block = (Vec<[f64; 3]>, Vec<FaceCoord>);
+    let per_domain: Vec<Option<Block>> = domains
+        .par_iter()
+        .map(|&(f, k)| {
             let mut pts = Vec::new();
             let mut params = Vec::new();
             for j in 0..=n {
-                for i in 0..=n - j {
-                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
-                    pts.push(eval(f, u, v)?);
-                    params.push((f, u, v));
+                let row = match shape {
+                    DomainShape::Triangle => n - j,
+                    DomainShape::Square => n,
+                };
+                for i in 0..=row {
+                    let at = FaceCoord::new(f, k, i as f64 / n as f64, j as f64 / n as f64);
+                    pts.push(eval(at)?);
+                    params.push(at);
                 }
             }
             Some((pts, params))
         })
         .collect();
-    // Index of (i, j) within a face's block: rows of n + 1, n, ... points.
-    let idx = |i: usize, j: usize| (j * (2 * n + 3 - j) / 2 + i) as u32;
+    // Index of (i, j) within a domain's block: rows of n + 1, n, ... points (triangle) or of
+    // n + 1 (square).
+    let idx = |i: usize, j: usize| match shape {
+        DomainShape::Triangle => (j * (2 * n + 3 - j) / 2 + i) as u32,
+        DomainShape::Square => (j * (n + 1) + i) as u32,
+    };
     let mut points = Vec::new();
     let mut params = Vec::new();
     let mut tris = Vec::new();
-    for (pts, ps) in per_face.into_iter().flatten() {
+    for (pts, ps) in per_domain.into_iter().flatten() {
         let base = points.len() as u32;
         points.extend(pts);
         params.extend(ps);
         for j in 0..n {
-            for i in 0..n - j {
+            let row = match shape {
+                DomainShape::Triangle => n - j,
+                DomainShape::Square => n,
+            };
+            for i in 0..row {
                 tris.push([base + idx(i, j), base + idx(i + 1, j), base + idx(i, j + 1)]);
-                if i + j + 2 <= n {
+                if shape == DomainShape::Square || i + j + 2 <= n {
                     tris.push([
                         base + idx(i + 1, j),
                         base + idx(i + 1, j + 1),
@@ -171,22 +215,24 @@ fn tessellate(faces: usize, n: usize, eval: TriPos) -> Result<Tess> {
     Ok(Tess {
         mesh: ClosestMesh::new(points, tris),
         params,
+        shape,
         cdf,
     })
 }
 
 impl Tess {
     /// The parameter of barycentric point `w` of triangle `t`.
-    fn param(&self, t: u32, w: [f64; 3]) -> (u32, f64, f64) {
+    fn param(&self, t: u32, w: [f64; 3]) -> FaceCoord {
         let tri = self.mesh.triangle(t);
         let ps = tri.map(|v| self.params[v as usize]);
-        let u = w[0] * ps[0].1 + w[1] * ps[1].1 + w[2] * ps[2].1;
-        let v = w[0] * ps[0].2 + w[1] * ps[1].2 + w[2] * ps[2].2;
-        (ps[0].0, u.max(0.0), v.max(0.0).min(1.0 - u.max(0.0)))
+        let u = w[0] * ps[0].u + w[1] * ps[1].u + w[2] * ps[2].u;
+        let v = w[0] * ps[0].v + w[1] * ps[1].v + w[2] * ps[2].v;
+        let (u, v) = self.shape.clamp(u, v);
+        FaceCoord::new(ps[0].face, ps[0].k, u, v)
     }
 
     /// An area-uniform random parameter.
-    fn draw(&self, rng: &mut SplitMix64) -> (u32, f64, f64) {
+    fn draw(&self, rng: &mut SplitMix64) -> FaceCoord {
         let total = *self.cdf.last().expect("a tessellation has triangles");
         let x = rng.next_f64() * total;
         let t = self.cdf.partition_point(|&c| c < x).min(self.cdf.len() - 1);
@@ -195,25 +241,14 @@ impl Tess {
     }
 }
 
-/// Keeps `(u, v)` in the triangle `u, v ≥ 0`, `u + v ≤ 1`.
-fn clamp_tri(mut u: f64, mut v: f64) -> (f64, f64) {
-    if u + v > 1.0 {
-        let e = 0.5 * (u + v - 1.0);
-        u -= e;
-        v -= e;
-    }
-    u = u.clamp(0.0, 1.0);
-    v = v.clamp(0.0, 1.0 - u);
-    (u, v)
-}
-
 /// The distance from `x` to the surface and the surface's unit normal there.
-fn project(tess: &Tess, eval: TriEval, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
+fn project(tess: &Tess, eval: Eval, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
     let c = tess.mesh.closest(x)?;
-    let (f, mut u, mut v) = tess.param(c.tri, c.bary);
+    let at = tess.param(c.tri, c.bary);
+    let (mut u, mut v) = (at.u, at.v);
     let mut best: Option<(f64, [f64; 3])> = None;
     for _ in 0..16 {
-        let s = eval(f, u, v)?;
+        let s = eval(FaceCoord { u, v, ..at })?;
         let r = sub(s.p, x);
         let d = norm(r);
         if best.is_none_or(|b| d < b.0) {
@@ -226,7 +261,7 @@ fn project(tess: &Tess, eval: TriEval, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
             break;
         }
         let (du, dv) = ((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det);
-        let (nu, nv) = clamp_tri(u + du, v + dv);
+        let (nu, nv) = tess.shape.clamp(u + du, v + dv);
         if (nu - u).abs() + (nv - v).abs() < 1e-14 {
             break;
         }
@@ -240,17 +275,17 @@ fn project(tess: &Tess, eval: TriEval, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
 #[derive(Clone, Copy, Debug, Default)]
 struct OneWay {
     max: f64,
-    max_at: (u32, f64, f64),
+    max_at: FaceCoord,
     sum: f64,
     sq: f64,
     nmax: f64,
-    nmax_at: (u32, f64, f64),
+    nmax_at: FaceCoord,
     nsum: f64,
     count: usize,
 }
 
 impl OneWay {
-    fn add(&mut self, at: (u32, f64, f64), d: f64, ang: f64) {
+    fn add(&mut self, at: FaceCoord, d: f64, ang: f64) {
         if d > self.max {
             self.max = d;
             self.max_at = at;
@@ -291,12 +326,7 @@ impl OneWay {
 }
 
 /// [`OneWay`] over `samples` area-uniform points of `src`, projected onto `dst`.
-fn one_way(
-    src: (&Tess, TriEval),
-    dst: (&Tess, TriEval),
-    samples: usize,
-    seed: u64,
-) -> Result<OneWay> {
+fn one_way(src: (&Tess, Eval), dst: (&Tess, Eval), samples: usize, seed: u64) -> Result<OneWay> {
     const CHUNK: usize = 1024;
     let chunks = samples.div_ceil(CHUNK);
     let total = (0..chunks)
@@ -307,7 +337,7 @@ fn one_way(
             let mut acc = OneWay::default();
             for _ in 0..n {
                 let at = src.0.draw(&mut rng);
-                let Some(s) = (src.1)(at.0, at.1, at.2) else {
+                let Some(s) = (src.1)(at) else {
                     continue;
                 };
                 let Some((d, nd)) = project(dst.0, dst.1, s.p) else {
@@ -328,40 +358,83 @@ fn one_way(
 /// The exact surface prepared once for measuring several approximations of it: its
 /// tessellation and diagonal.
 pub struct Reference<'a> {
-    exact: &'a LoopSurface,
+    exact: &'a PatchTable,
+    shape: DomainShape,
+    domains: Vec<(u32, u32)>,
     tess: Tess,
     diagonal: f64,
     opts: ErrorOptions,
 }
 
+/// `table`'s surface at a domain point: the triangle parameter under Loop, the (sub-)face's
+/// square under Catmull-Clark.
+fn eval_in(table: &PatchTable, shape: DomainShape, at: FaceCoord) -> Option<Sample> {
+    match shape {
+        DomainShape::Triangle => table.eval_triangle(at).ok(),
+        DomainShape::Square => table.eval(at).ok(),
+    }
+}
+
 impl<'a> Reference<'a> {
-    /// Tessellates `exact` (positions only: no secants at its vertices).
-    pub fn new(exact: &'a LoopSurface, opts: ErrorOptions) -> Result<Self> {
+    /// Tessellates the exact surface of `exact` (a table built with the exact surface; a Loop
+    /// surface's positions without the secants at its vertices).
+    pub fn new(exact: &'a PatchTable, opts: ErrorOptions) -> Result<Self> {
         if opts.samples == 0 || opts.tess == 0 {
             return Err(Error::new(
                 ErrorKind::Usage,
                 "samples and tessellation rate must be at least 1",
             ));
         }
-        let pos = |f: u32, u: f64, v: f64| exact.position(FaceCoord::new(f, 0, u, v)).ok();
-        let tess = tessellate(exact.num_faces(), opts.tess, &pos)?;
+        if exact.is_approximate() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "the reference must be the exact surface",
+            ));
+        }
+        let (shape, domains): (DomainShape, Vec<(u32, u32)>) = match exact.loop_surface() {
+            Some(_) => (
+                DomainShape::Triangle,
+                (0..exact.num_faces() as u32).map(|f| (f, 0)).collect(),
+            ),
+            None => (
+                DomainShape::Square,
+                (0..exact.num_faces())
+                    .flat_map(|f| (0..exact.sub_faces(f) as u32).map(move |k| (f as u32, k)))
+                    .collect(),
+            ),
+        };
+        let pos = |at: FaceCoord| match exact.loop_surface() {
+            Some(ls) => ls.position(at).ok(),
+            None => exact.eval(at).ok().map(|s| s.p),
+        };
+        let tess = tessellate(&domains, shape, opts.tess, &pos)?;
         let diagonal = tess.mesh.diagonal();
         Ok(Reference {
             exact,
+            shape,
+            domains,
             tess,
             diagonal,
             opts,
         })
     }
 
-    /// The distance between `approx` and the exact surface.
-    pub fn measure(&self, approx: &TriApprox) -> Result<ApproxError> {
-        let opts = self.opts;
-        let exact = self.exact;
-        let ex = |f: u32, u: f64, v: f64| exact.eval(FaceCoord::new(f, 0, u, v)).ok();
-        let ap = |f: u32, u: f64, v: f64| approx.eval(FaceCoord::new(f, 0, u, v)).ok();
-        let ap_p = |f: u32, u: f64, v: f64| ap(f, u, v).map(|s| s.p);
-        let ta = tessellate(approx.num_faces(), opts.tess, &ap_p)?;
+    /// The distance between `approx` (a table of the same mesh and scheme built with an
+    /// approximate surface) and the exact surface.
+    pub fn measure(&self, approx: &PatchTable) -> Result<ApproxError> {
+        if approx.loop_surface().is_some() != (self.shape == DomainShape::Triangle)
+            || approx.num_faces() != self.exact.num_faces()
+        {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "the approximation is not of the reference's mesh and scheme",
+            ));
+        }
+        let (opts, shape, exact) = (self.opts, self.shape, self.exact);
+        let ex = |at: FaceCoord| eval_in(exact, shape, at);
+        let ap = |at: FaceCoord| eval_in(approx, shape, at);
+        let ap_p = |at: FaceCoord| ap(at).map(|s| s.p);
+        let ta = tessellate(&self.domains, shape, opts.tess, &ap_p)?;
         let te = &self.tess;
         let fwd = one_way((&ta, &ap), (te, &ex), opts.samples, opts.seed)?;
         let rev = one_way(
@@ -373,7 +446,7 @@ impl<'a> Reference<'a> {
         let diagonal = self.diagonal;
         let rel = |x: f64| if diagonal > 0.0 { x / diagonal } else { x };
         Ok(ApproxError {
-            surface: approx.kind(),
+            surface: approx.options.surface,
             max: rel(fwd.max),
             mean: rel(fwd.mean()),
             rms: rel(fwd.rms()),
@@ -390,9 +463,9 @@ impl<'a> Reference<'a> {
     }
 }
 
-/// The distance between `approx` and the exact surface `exact` it approximates (one
-/// approximation: [`Reference`] prepares the exact side once for several).
-pub fn measure(exact: &LoopSurface, approx: &TriApprox, opts: ErrorOptions) -> Result<ApproxError> {
+/// The distance between the approximation `approx` and the exact surface `exact` (two tables
+/// of one mesh; [`Reference`] prepares the exact side once for several approximations).
+pub fn measure(exact: &PatchTable, approx: &PatchTable, opts: ErrorOptions) -> Result<ApproxError> {
     Reference::new(exact, opts)?.measure(approx)
 }
 
@@ -402,33 +475,35 @@ mod tests {
 
     /// A surface's distance to itself is zero (the projection finds the drawn point again)
     /// and a copy moved by `δ` along z measures `δ` wherever its normal is vertical: checked
-    /// on a flat sheet, where the closed form is exact.
+    /// on a flat sheet, where the closed form is exact, over both domain shapes.
     #[test]
     fn distances_of_a_known_offset() {
         let plane = |dz: f64| {
-            move |_f: u32, u: f64, v: f64| {
+            move |at: FaceCoord| {
                 Some(Sample {
-                    p: [u, v, dz],
+                    p: [at.u, at.v, dz],
                     du: [1.0, 0.0, 0.0],
                     dv: [0.0, 1.0, 0.0],
                     ..Sample::default()
                 })
             }
         };
-        let (a, b) = (plane(0.0), plane(0.01));
-        let pa = |f: u32, u: f64, v: f64| a(f, u, v).map(|s| s.p);
-        let pb = |f: u32, u: f64, v: f64| b(f, u, v).map(|s| s.p);
-        let (ta, tb) = (
-            tessellate(1, 4, &pa).unwrap(),
-            tessellate(1, 4, &pb).unwrap(),
-        );
-        let same = one_way((&ta, &a), (&ta, &a), 2000, 3).unwrap();
-        assert!(same.max < 1e-15 && same.nmax < 1e-9, "{same:?}");
-        let off = one_way((&ta, &a), (&tb, &b), 2000, 3).unwrap();
-        assert!(
-            (off.max - 0.01).abs() < 1e-15 && (off.mean() - 0.01).abs() < 1e-15,
-            "{off:?}"
-        );
-        assert_eq!(off.count, 2000);
+        for shape in [DomainShape::Triangle, DomainShape::Square] {
+            let (a, b) = (plane(0.0), plane(0.01));
+            let pa = |at: FaceCoord| a(at).map(|s| s.p);
+            let pb = |at: FaceCoord| b(at).map(|s| s.p);
+            let (ta, tb) = (
+                tessellate(&[(0, 0)], shape, 4, &pa).unwrap(),
+                tessellate(&[(0, 0)], shape, 4, &pb).unwrap(),
+            );
+            let same = one_way((&ta, &a), (&ta, &a), 2000, 3).unwrap();
+            assert!(same.max < 1e-15 && same.nmax < 1e-9, "{same:?}");
+            let off = one_way((&ta, &a), (&tb, &b), 2000, 3).unwrap();
+            assert!(
+                (off.max - 0.01).abs() < 1e-15 && (off.mean() - 0.01).abs() < 1e-15,
+                "{off:?}"
+            );
+            assert_eq!(off.count, 2000);
+        }
     }
 }
