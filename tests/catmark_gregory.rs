@@ -22,18 +22,6 @@ fn tables(m: &ControlMesh) -> (PatchTable, PatchTable) {
     (exact, greg)
 }
 
-fn diagonal(m: &ControlMesh) -> f64 {
-    let mut lo = [f64::MAX; 3];
-    let mut hi = [f64::MIN; 3];
-    for p in &m.positions {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
-    norm(sub(hi, lo))
-}
-
 /// Where every vertex of a face is interior (valence 4, nothing sharp), its four level-1
 /// quads have only regular vertices: the Gregory patches are the B-spline patches, to
 /// rounding (≤ 1e-12 of the diagonal; measured 1.1e-15), derivatives included.
@@ -46,7 +34,7 @@ fn regular_patches_are_reproduced() {
         p[2] = r.next_f64() - 0.5;
     }
     let (exact, greg) = tables(&m);
-    let diag = diagonal(&m);
+    let diag = m.diagonal();
     let interior = |f: usize| {
         m.face(f).iter().all(|&v| {
             m.positions[v as usize][0] > 0.5
@@ -85,7 +73,7 @@ fn continuity(m: &ControlMesh, greg: &PatchTable) -> (f64, f64, usize) {
     let q = greg.quad_approx().expect("a Gregory table");
     let patches: Vec<_> = q.patches().collect();
     let corner = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-    let diag = diagonal(m);
+    let diag = m.diagonal();
     let (mut gap, mut angle, mut singular) = (0.0f64, 0.0f64, 0);
     for e in 0..lvl.topo.num_edges() as u32 {
         let faces = lvl.topo.edge_face_list(e);
@@ -148,7 +136,7 @@ fn patches_are_watertight_and_g1() {
 fn corners_interpolate_and_patches_stay_close() {
     for (name, m) in closed_meshes() {
         let (exact, greg) = tables(&m);
-        let diag = diagonal(&m);
+        let diag = m.diagonal();
         let mut worst = 0.0f64;
         for f in 0..m.num_faces() as u32 {
             for k in 0..exact.sub_faces(f as usize) as u32 {

@@ -48,6 +48,16 @@ fn build_from(table: PatchTable, mesh: &ControlMesh, rate: u32) -> (PatchTable, 
     (table, Built { diced: d, grid })
 }
 
+/// `(thinnest extent, largest coordinate)` of a mesh thinner than 8 float steps where it
+/// lies: no point strictly inside exists, and the dicing collapses onto a few planes (a
+/// degenerate, slow BVH build).
+fn too_thin(m: &ControlMesh) -> Option<(f64, f64)> {
+    let [lo, hi] = m.bounds();
+    let thinnest = (0..3).map(|a| hi[a] - lo[a]).fold(f64::INFINITY, f64::min);
+    let magnitude = lo.iter().chain(&hi).fold(0.0f64, |a, x| a.max(x.abs()));
+    (thinnest < 8.0 * magnitude * f32::EPSILON as f64).then_some((thinnest, magnitude))
+}
+
 fn translated(mesh: &ControlMesh, by: [f64; 3]) -> ControlMesh {
     let mut m = mesh.clone();
     for p in &mut m.positions {
@@ -160,12 +170,7 @@ fn corpus_closed_shapes_do_not_leak() {
             for by in [[0.0; 3], FAR] {
                 let t0 = std::time::Instant::now();
                 let m = translated(&mesh, by);
-                // Thinner than 8 float steps where it lies: no point strictly inside exists,
-                // and the dicing collapses onto a few planes (a degenerate, slow BVH build).
-                let [lo, hi] = m.bounds();
-                let thinnest = (0..3).map(|a| hi[a] - lo[a]).fold(f64::INFINITY, f64::min);
-                let magnitude = lo.iter().chain(&hi).fold(0.0f64, |a, x| a.max(x.abs()));
-                if thinnest < 8.0 * magnitude * f32::EPSILON as f64 {
+                if let Some((thinnest, magnitude)) = too_thin(&m) {
                     eprintln!(
                         "note: {name} rate {rate} at {by:?}: {thinnest} thick at magnitude \
                          {magnitude}: no point strictly inside; skipped"
@@ -217,10 +222,7 @@ fn catmark_gregory_patches_do_not_leak() {
             }
             for by in [[0.0; 3], FAR] {
                 let m = translated(&mesh, by);
-                let [lo, hi] = m.bounds();
-                let thinnest = (0..3).map(|a| hi[a] - lo[a]).fold(f64::INFINITY, f64::min);
-                let magnitude = lo.iter().chain(&hi).fold(0.0f64, |a, x| a.max(x.abs()));
-                if thinnest < 8.0 * magnitude * f32::EPSILON as f64 {
+                if too_thin(&m).is_some() {
                     continue;
                 }
                 let opts = PatchOptions {

@@ -18,25 +18,13 @@ fn loop_opts(m: &ControlMesh) -> Options {
     }
 }
 
-fn diagonal(m: &ControlMesh) -> f64 {
-    let mut lo = [f64::MAX; 3];
-    let mut hi = [f64::MIN; 3];
-    for p in &m.positions {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
-    norm(sub(hi, lo))
-}
-
 /// Along every interior edge at 9 points: the largest position gap and tangent-plane angle
 /// (degrees) between the two faces' patches, and the number of points where a patch is
 /// singular.
 fn edge_continuity(m: &ControlMesh, s: &TriApprox) -> (f64, f64, usize) {
     let exact = LoopSurface::new(m, loop_opts(m)).unwrap();
     let topo = &exact.level().topo;
-    let diag = diagonal(m);
+    let diag = m.diagonal();
     let (mut gap, mut angle, mut singular) = (0.0f64, 0.0f64, 0);
     for e in 0..topo.num_edges() as u32 {
         let faces = topo.edge_face_list(e);
@@ -108,7 +96,7 @@ fn closed_meshes() -> Vec<(String, ControlMesh)> {
 fn approximations_are_watertight_and_wm_and_gregory_are_g1() {
     for (name, m) in closed_meshes() {
         let exact = LoopSurface::new(&m, loop_opts(&m)).unwrap();
-        let diag = diagonal(&m);
+        let diag = m.diagonal();
         for kind in [Approximation::Pn, Approximation::Wm, Approximation::Gregory] {
             let s = TriApprox::new(&exact, kind).unwrap();
             let (gap, angle, singular) = edge_continuity(&m, &s);
@@ -177,7 +165,7 @@ fn planes_are_reproduced() {
 fn approximations_interpolate_corners_and_stay_close() {
     for (name, m) in closed_meshes() {
         let exact = LoopSurface::new(&m, loop_opts(&m)).unwrap();
-        let diag = diagonal(&m);
+        let diag = m.diagonal();
         for kind in [Approximation::Pn, Approximation::Wm, Approximation::Gregory] {
             let s = TriApprox::new(&exact, kind).unwrap();
             let mut worst = 0.0f64;

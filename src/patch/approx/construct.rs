@@ -174,7 +174,7 @@ fn exact_normal(surface: &LoopSurface, v: usize) -> Option<[f64; 3]> {
 }
 
 /// `x` with its component along the unit vector `n` removed.
-fn in_plane(x: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+pub(super) fn in_plane(x: [f64; 3], n: [f64; 3]) -> [f64; 3] {
     sub(x, scale(n, dot(x, n)))
 }
 
@@ -297,7 +297,7 @@ fn edge_data(
 }
 
 /// Coefficients `(α, β)` of `d = α t + β r` for `t ⟂ r` (zero where either vanishes).
-fn decompose(d: [f64; 3], t: [f64; 3], r: [f64; 3]) -> (f64, f64) {
+pub(super) fn decompose(d: [f64; 3], t: [f64; 3], r: [f64; 3]) -> (f64, f64) {
     let (tt, rr) = (dot(t, t), dot(r, r));
     let a = if tt > 0.0 { dot(d, t) / tt } else { 0.0 };
     let b = if rr > 0.0 { dot(d, r) / rr } else { 0.0 };

@@ -32,6 +32,7 @@
 //! continuous across every smooth edge (measured in the tests). The two middle Bézier
 //! coefficients of `D` give the edge's two interior points.
 
+use super::construct::{decompose, in_plane};
 use super::gregory_quad::GregoryQuad;
 use crate::coord::FaceCoord;
 use crate::error::Result;
@@ -227,10 +228,6 @@ struct Smooth {
 struct VertexData {
     p: [f64; 3],
     smooth: Option<Smooth>,
-}
-
-fn in_plane(x: [f64; 3], n: [f64; 3]) -> [f64; 3] {
-    sub(x, scale(n, dot(x, n)))
 }
 
 impl VertexData {
@@ -475,14 +472,6 @@ pub fn build(
         })
         .collect();
     Ok((frames, patches))
-}
-
-/// Coefficients `(α, β)` of `d = α t + β r` for `t ⟂ r` (zero where either vanishes).
-fn decompose(d: [f64; 3], t: [f64; 3], r: [f64; 3]) -> (f64, f64) {
-    let (tt, rr) = (dot(t, t), dot(r, r));
-    let a = if tt > 0.0 { dot(d, t) / tt } else { 0.0 };
-    let b = if rr > 0.0 { dot(d, r) / rr } else { 0.0 };
-    (a, b)
 }
 
 fn face_patch(
