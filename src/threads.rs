@@ -26,8 +26,58 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
         })
 }
 
+thread_local! {
+    static SEQUENTIAL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `work` on this thread with forking turned off: while it runs, [`may_fork`] is false
+/// here, so the parallel helpers (refinement rows, stencil application, topology) run their
+/// loops in place.
+///
+/// Lazily built caches (`OnceLock::get_or_init`) need this. Forking inside an initialiser
+/// deadlocks at 0% CPU in two ways: a thread outside the pool hands its loop to the workers
+/// and waits, while every worker waits for the cell it holds (seen: two test threads and the
+/// Loop Bézier matrix); or a worker, waiting in a join, steals a job that asks for the cell
+/// it is itself initialising.
+pub fn sequential<T>(work: impl FnOnce() -> T) -> T {
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            SEQUENTIAL.with(|s| s.set(self.0));
+        }
+    }
+    let _restore = Restore(SEQUENTIAL.with(|s| s.replace(true)));
+    work()
+}
+
+/// False inside [`sequential`]: parallel helpers check it before splitting their work.
+pub fn may_fork() -> bool {
+    !SEQUENTIAL.with(|s| s.get())
+}
+
+/// The `with_min_len` a parallel helper gives its iterator: 1 normally, and unsplittable
+/// inside [`sequential`], so that rayon runs the whole loop in place.
+pub fn min_len() -> usize {
+    if may_fork() {
+        1
+    } else {
+        usize::MAX
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn sequential_nests_and_restores() {
+        assert!(super::may_fork());
+        let inner = super::sequential(|| {
+            let nested = super::sequential(super::may_fork);
+            (nested, super::may_fork())
+        });
+        assert_eq!(inner, (false, false));
+        assert!(super::may_fork());
+    }
+
     #[test]
     fn caps() {
         let e = super::pool(5000).err().unwrap();

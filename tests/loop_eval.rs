@@ -307,3 +307,62 @@ fn loop_evaluation_matches_far_on_random_meshes() {
             .join("\n")
     );
 }
+
+/// The level dicing records per triangle, found without evaluating where a regular patch
+/// holds the point (`PatchTable::level_at`), is the level evaluation reports, on the Loop
+/// corpus shapes and the blob, near vertices too; and the approximations report theirs (1)
+/// for whole domains.
+#[test]
+fn level_lookup_equals_evaluation() {
+    use limitray::patch::approx::Approximation;
+    use limitray::patch::{PatchOptions, PatchTable};
+    let mut meshes = vec![limitray::mesh::shapes::blob()];
+    if let Some(models) = common::shared_models() {
+        for name in [
+            "loop_cube",
+            "loop_xord_interior",
+            "loop_cube_creases0",
+            "loop_pole8",
+        ] {
+            meshes.push(read_obj(&models.join(format!("opensubdiv/{name}.obj"))).unwrap());
+        }
+    }
+    let mut checked = 0;
+    for mut m in meshes {
+        m.options.scheme = limitray::mesh::Scheme::Loop;
+        let table = PatchTable::new(&m, PatchOptions::default()).unwrap();
+        let mut r = limitray::harness::rng::SplitMix64::new(9);
+        for f in 0..table.num_faces() as u32 {
+            for k in 0..3 {
+                for (u, v) in [
+                    (0.0, 0.0),
+                    (1e-9, 2e-9),
+                    (0.5, 0.5),
+                    (1.0, 1.0),
+                    (r.next_f64(), r.next_f64()),
+                ] {
+                    let at = limitray::FaceCoord::new(f, k, u, v);
+                    match table.eval(at) {
+                        Ok(s) => assert_eq!(table.level_at(at).unwrap(), s.level, "{at:?}"),
+                        Err(_) => assert!(table.level_at(at).is_err()),
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        let approx = PatchTable::new(
+            &m,
+            PatchOptions {
+                surface: Approximation::Gregory,
+                ..PatchOptions::default()
+            },
+        )
+        .unwrap();
+        let at = limitray::FaceCoord::new(0, 1, 0.3, 0.6);
+        assert_eq!(
+            approx.domain_level(0, 1),
+            Some(approx.eval(at).unwrap().level)
+        );
+    }
+    assert!(checked >= 4800, "{checked}");
+}

@@ -273,6 +273,7 @@ impl Topology {
         }
         let blocks: Vec<Block> = (0..num_vertices.div_ceil(BLOCK))
             .into_par_iter()
+            .with_min_len(crate::threads::min_len())
             .map(|blk| {
                 let range = blk * BLOCK..((blk + 1) * BLOCK).min(num_vertices);
                 let mut out = Block {

@@ -96,7 +96,9 @@ pub fn bernstein(u: f64, v: f64) -> [[f64; 15]; 6] {
 /// ([`bezier_indices`] order), derived once (see the module documentation).
 pub fn bezier_matrix() -> &'static [[f64; 12]; 15] {
     static M: OnceLock<[[f64; 12]; 15]> = OnceLock::new();
-    M.get_or_init(|| derive_bezier_matrix().0)
+    // Derived without forking: a static initialiser that waits on rayon workers that are
+    // themselves waiting for this cell deadlocks (see `threads::sequential`).
+    M.get_or_init(|| crate::threads::sequential(|| derive_bezier_matrix().0))
 }
 
 /// A regular lattice of `(2r+1)²` points `(i, j)`, `|i|, |j| ≤ r`, each unit square cut along

@@ -105,12 +105,15 @@ impl LoopSurface {
 
     /// The tree of face `f`, built on first use.
     fn tree(&self, f: usize) -> &Node {
+        // Built without forking: see `threads::sequential` for the deadlock a fork here risks.
         self.trees[f].get_or_init(|| {
-            if self.level.face_hole[f] {
-                return Node::Hole;
-            }
-            let local = LocalMesh::extract(&self.level, &self.positions, 3, f, 2);
-            self.build_node(local, 0)
+            crate::threads::sequential(|| {
+                if self.level.face_hole[f] {
+                    return Node::Hole;
+                }
+                let local = LocalMesh::extract(&self.level, &self.positions, 3, f, 2);
+                self.build_node(local, 0)
+            })
         })
     }
 
@@ -279,6 +282,45 @@ impl LoopSurface {
     /// derivatives with respect to `(s, t)`: how a triangle is diced, as three quads.
     pub fn eval_sub_quad(&self, at: FaceCoord) -> Result<Sample> {
         eval_sub_quad(at, |u, v| self.eval(FaceCoord::new(at.face, 0, u, v)))
+    }
+
+    /// [`Sample::level`] of [`Self::eval`] at `at`, from the face's tree alone where the point
+    /// is in a regular patch (an evaluation, without the vertex secants, in a cap).
+    pub fn level_at(&self, at: FaceCoord) -> Result<u8> {
+        check_triangle_coord(at, self.num_faces())?;
+        let (mut u, mut v) = (at.u.max(0.0), at.v.max(0.0));
+        let mut node = self.tree(at.face as usize);
+        let mut depth = 0u8;
+        loop {
+            match node {
+                Node::Hole => {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!("face {} is a hole", at.face),
+                    ))
+                }
+                Node::Regular(_) => return Ok(depth),
+                Node::Cap(_) => return Ok(self.eval_with(at, false)?.level),
+                Node::Split(kids) => {
+                    let (k, s, t) = child_of(u, v);
+                    node = &kids[k];
+                    (u, v) = (s, t);
+                    depth += 1;
+                }
+            }
+        }
+    }
+
+    /// [`Self::level_at`] at the sub-quad parameter: [`Sample::level`] of
+    /// [`Self::eval_sub_quad`].
+    pub fn level_sub_quad(&self, at: FaceCoord) -> Result<u8> {
+        let s = eval_sub_quad(at, |u, v| {
+            Ok(Sample {
+                level: self.level_at(FaceCoord::new(at.face, 0, u, v))?,
+                ..Sample::default()
+            })
+        })?;
+        Ok(s.level)
     }
 
     /// The base level (control mesh topology and tags) the surface refines.

@@ -169,6 +169,7 @@ impl StencilTable {
             fill(0, dst);
         } else {
             dst.par_chunks_mut(CHUNK * width)
+                .with_min_len(crate::threads::min_len())
                 .enumerate()
                 .for_each(|(c, out)| fill(c, out));
         }

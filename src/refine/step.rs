@@ -51,6 +51,7 @@ where
 {
     let parts: Vec<StencilTable> = (0..count.div_ceil(CHUNK))
         .into_par_iter()
+        .with_min_len(crate::threads::min_len())
         .map(|c| {
             let mut t = StencilTable::new(num_inputs);
             let mut acc = Accumulator::new();

@@ -134,7 +134,10 @@ impl PatchTable {
                 break;
             }
             let (q, s2, t2) = descend(s, t);
-            let child = node.kids[q].get_or_init(|| Box::new(node.child(q, self.method, sc)));
+            // Built without forking: see `threads::sequential` for the deadlock a fork risks.
+            let child = node.kids[q].get_or_init(|| {
+                crate::threads::sequential(|| Box::new(node.child(q, self.method, sc)))
+            });
             data = child.rows.apply(&data, 3);
             node = child;
             frame = frame.child(q);

@@ -102,6 +102,12 @@ impl PatchTable {
     /// level is its own), by evaluation elsewhere (end caps and Stam patches report how deep
     /// their evaluation went).
     pub fn level_at(&self, at: FaceCoord) -> Result<u8> {
+        if self.is_approximate() {
+            return Ok(self.eval(at)?.level);
+        }
+        if let Some(surface) = &self.loop_surface {
+            return surface.level_sub_quad(at);
+        }
         let (face, k) = (at.face as usize, at.k as usize);
         if self.loop_surface.is_none()
             && face < self.num_faces()
@@ -139,7 +145,14 @@ impl PatchTable {
     /// The level [`Self::level_at`] gives everywhere in domain `(face, k)` when the whole
     /// domain is one B-spline or single-crease patch; `None` otherwise (or out of range).
     pub fn domain_level(&self, face: usize, k: usize) -> Option<u8> {
-        if self.loop_surface.is_some() || face >= self.num_faces() || k >= self.sub_faces(face) {
+        if face >= self.num_faces() || k >= self.sub_faces(face) {
+            return None;
+        }
+        if self.is_approximate() {
+            // One patch per triangle or level-1 quad: the level `eval` reports everywhere.
+            return Some(1);
+        }
+        if self.loop_surface.is_some() {
             return None;
         }
         match self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize] {
