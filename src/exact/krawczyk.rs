@@ -31,19 +31,28 @@ pub enum Verdict {
     Unknown,
 }
 
-/// Runs the test on the projected Bézier points `q` (`q[4 j + i]`), each known within `pad`
-/// (an absolute bound on rounding in the points, so that the proofs hold for the exact
-/// surface).
-pub fn krawczyk(q: &[[f64; 2]; 16], pad: f64) -> Verdict {
+/// Runs the test on the projected Bézier points `q` of a tensor-product patch of degree
+/// `N − 1` in each parameter (`q[N j + i]`, `i` along `s`; bicubic pieces have `N = 4`, the
+/// quartic pieces of Loop patches `N = 5`), each known within `pad` (an absolute bound on
+/// rounding in the points, so that the proofs hold for the exact surface).
+pub fn krawczyk<const N: usize>(q: &[[f64; 2]], pad: f64) -> Verdict {
+    assert_eq!(
+        q.len(),
+        N * N,
+        "a degree-{} piece has {} points",
+        N - 1,
+        N * N
+    );
+    let deg = (N - 1) as f64;
     // Interval enclosures of ∂Q/∂s and ∂Q/∂t: ranges of their Bézier points.
     let mut j = [[[f64::INFINITY, f64::NEG_INFINITY]; 2]; 2]; // j[component][s|t] = [lo, hi]
-    for row in 0..4 {
-        for col in 0..3 {
-            let (a, b) = (q[4 * row + col], q[4 * row + col + 1]);
-            let (c, d) = (q[4 * col + row], q[4 * (col + 1) + row]);
+    for row in 0..N {
+        for col in 0..N - 1 {
+            let (a, b) = (q[N * row + col], q[N * row + col + 1]);
+            let (c, d) = (q[N * col + row], q[N * (col + 1) + row]);
             for comp in 0..2 {
-                let ds = 3.0 * (b[comp] - a[comp]);
-                let dt = 3.0 * (d[comp] - c[comp]);
+                let ds = deg * (b[comp] - a[comp]);
+                let dt = deg * (d[comp] - c[comp]);
                 j[comp][0] = [j[comp][0][0].min(ds), j[comp][0][1].max(ds)];
                 j[comp][1] = [j[comp][1][0].min(dt), j[comp][1][1].max(dt)];
             }
@@ -54,8 +63,8 @@ pub fn krawczyk(q: &[[f64; 2]; 16], pad: f64) -> Verdict {
         .flat_map(|p| p.iter())
         .fold(0.0f64, |m, &x| m.max(x.abs()));
     let round = 32.0 * f64::EPSILON * scale;
-    // The derivatives of a perturbation of the points by `pad` are within 6·pad.
-    let dpad = 6.0 * (pad + round);
+    // The derivatives of a perturbation of the points by `pad` are within 2·deg·pad.
+    let dpad = 2.0 * deg * (pad + round);
     for row in &mut j {
         for e in row.iter_mut() {
             e[0] -= dpad;
@@ -69,14 +78,21 @@ pub fn krawczyk(q: &[[f64; 2]; 16], pad: f64) -> Verdict {
         return Verdict::Unknown;
     }
     let y = [[d / det, -b / det], [-c / det, a / det]];
-    // Q at the centre: Bernstein weights (1, 3, 3, 1)/8 in each direction.
-    const W: [f64; 4] = [0.125, 0.375, 0.375, 0.125];
+    // Q at the centre: Bernstein weights C(N − 1, i) / 2^(N − 1) in each direction (exact).
+    let w: [f64; N] = {
+        let mut w = [0.0; N];
+        w[0] = 1.0;
+        for i in 1..N {
+            w[i] = w[i - 1] * (N - i) as f64 / i as f64;
+        }
+        w.map(|x| x * 0.5f64.powi(N as i32 - 1))
+    };
     let mut f0 = [0.0; 2];
-    for row in 0..4 {
-        for col in 0..4 {
-            let w = W[row] * W[col];
-            f0[0] += w * q[4 * row + col][0];
-            f0[1] += w * q[4 * row + col][1];
+    for row in 0..N {
+        for col in 0..N {
+            let wt = w[row] * w[col];
+            f0[0] += wt * q[N * row + col][0];
+            f0[1] += wt * q[N * row + col][1];
         }
     }
     let frad = pad + round;
@@ -129,15 +145,15 @@ mod tests {
 
     #[test]
     fn plane_inside_is_unique_and_outside_excluded() {
-        match krawczyk(&plane(0.3, 0.6), 0.0) {
+        match krawczyk::<4>(&plane(0.3, 0.6), 0.0) {
             Verdict::Unique { lo, hi } => {
                 assert!(lo[0] <= 0.3 && 0.3 <= hi[0] && lo[1] <= 0.6 && 0.6 <= hi[1]);
                 assert!(hi[0] - lo[0] < 1e-9);
             }
             v => panic!("{v:?}"),
         }
-        assert_eq!(krawczyk(&plane(1.5, 0.5), 0.0), Verdict::Exclude);
-        assert_eq!(krawczyk(&plane(0.5, -0.2), 0.0), Verdict::Exclude);
+        assert_eq!(krawczyk::<4>(&plane(1.5, 0.5), 0.0), Verdict::Exclude);
+        assert_eq!(krawczyk::<4>(&plane(0.5, -0.2), 0.0), Verdict::Exclude);
     }
 
     #[test]
@@ -148,6 +164,6 @@ mod tests {
             // Bernstein points of (s − ½)² − 0.01 = 0.24 − s + s² on [0, 1].
             p[0] = [0.24, 0.24 - 1.0 / 3.0, 0.24 - 1.0 / 3.0, 0.24][n % 4];
         }
-        assert_eq!(krawczyk(&q, 0.0), Verdict::Unknown);
+        assert_eq!(krawczyk::<4>(&q, 0.0), Verdict::Unknown);
     }
 }

@@ -101,6 +101,8 @@ pub struct ExactTracer {
     /// (`(0,0)`, `(1,0)`, `(1,1)`, `(0,1)`).
     sharp: Vec<u8>,
     slot_offsets: Vec<u32>,
+    /// A Loop surface: pieces and hits in each triangle's own `(u, v)` (`k = 0`).
+    triangles: bool,
 }
 
 /// One entry of the search's queue: something whose bound the ray enters at `w` (distance
@@ -183,7 +185,8 @@ fn project(r: &RayFrame, piece: &Piece) -> Projected {
     // Rounding of the points themselves (conversion and splits, a few ulps per level) and of
     // the projection.
     let pad = f64::EPSILON
-        * ((16.0 + 4.0 * piece.depth as f64) * max_abs(pts) + 8.0 * (r.omax + max_abs(pts)));
+        * ((16.0 + 4.0 * piece.depth as f64) * max_abs(pts) + 8.0 * (r.omax + max_abs(pts)))
+        + piece.pad();
     let mut q = Vec::with_capacity(pts.len());
     let (mut w0, mut w1) = (f64::INFINITY, f64::NEG_INFINITY);
     for p in pts {
@@ -216,7 +219,7 @@ fn straddles(p: &Projected) -> bool {
 fn piece_box(piece: &Piece) -> Aabb {
     let pts = piece.hull();
     let pts = &pts[..];
-    let pad = f64::EPSILON * (16.0 + 8.0) * max_abs(pts) + f64::MIN_POSITIVE;
+    let pad = f64::EPSILON * (16.0 + 8.0) * max_abs(pts) + f64::MIN_POSITIVE + piece.pad();
     let mut b: Aabb = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in pts {
         for a in 0..3 {
@@ -253,21 +256,27 @@ impl ExactTracer {
                  approximation (--surface)",
             ));
         }
-        if table.loop_surface().is_some() {
-            return Err(crate::error::Error::new(
-                crate::error::ErrorKind::Usage,
-                "the reference intersector (--exact) does not support the Loop scheme yet",
-            ));
-        }
         use rayon::prelude::*;
-        let roots: Vec<Piece> = (0..table.patches.len())
-            .into_par_iter()
-            .flat_map_iter(|p| {
-                let mut v = Vec::new();
-                table.patch_pieces(p, &mut v);
-                v
-            })
-            .collect();
+        let triangles = table.loop_surface().is_some();
+        let roots: Vec<Piece> = if triangles {
+            (0..table.num_faces())
+                .into_par_iter()
+                .flat_map_iter(|f| {
+                    let mut v = Vec::new();
+                    table.loop_pieces(f, &mut v);
+                    v
+                })
+                .collect()
+        } else {
+            (0..table.patches.len())
+                .into_par_iter()
+                .flat_map_iter(|p| {
+                    let mut v = Vec::new();
+                    table.patch_pieces(p, &mut v);
+                    v
+                })
+                .collect()
+        };
         let boxes: Vec<Aabb> = roots.par_iter().map(piece_box).collect();
         let tree = PieceTree::build(&boxes);
         let extent = boxes.iter().fold(0.0f64, |m, b| {
@@ -291,6 +300,18 @@ impl ExactTracer {
             let verts = topo.face_vertices(f);
             let n = verts.len();
             let edge = |i: usize| topo.face_edge(f, i % n);
+            if triangles {
+                // One slot per triangle: edges v = 0, u + v = 1, u = 0 (bits 0–2) and corners
+                // (0,0), (1,0), (0,1) (bits 4–6).
+                let mut bits = 0u8;
+                for i in 0..3 {
+                    bits |= (sharp_edge(edge(i)) as u8) << i;
+                    bits |= (sharp_vertex(verts[i]) as u8) << (4 + i);
+                }
+                sharp.push(bits);
+                slot_offsets.push(sharp.len() as u32);
+                continue;
+            }
             for k in 0..table.sub_faces(f) {
                 let mut bits = 0u8;
                 if n == 4 {
@@ -316,6 +337,7 @@ impl ExactTracer {
             extent,
             sharp,
             slot_offsets,
+            triangles,
         })
     }
 
@@ -454,15 +476,31 @@ impl Search<'_> {
         };
         if proj.w.1 - proj.w.0 <= self.tol {
             // Thin along the ray: any crossing here is within tol of Newton's.
-            if !self.newton(piece, 0.5, 0.5, proj.w, None) {
+            let (s, t) = piece.centre();
+            if !self.newton(piece, s, t, proj.w, None) {
                 self.graze(proj.w.0, size);
             }
             return;
         }
         match &piece.shape {
+            Shape::Quartic { .. } => match krawczyk::<5>(&proj.q, proj.pad) {
+                Verdict::Exclude => {}
+                Verdict::Unique { lo, hi } => {
+                    // The one zero of the polynomial in the square: settled without a hit
+                    // when its enclosure lies beyond the triangle; otherwise Newton must find
+                    // it on the triangle, or the piece is split.
+                    if !piece.holds(lo[0], lo[1]) {
+                        return;
+                    }
+                    let (s, t) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+                    if !self.newton(piece, s, t, proj.w, Some((lo, hi))) {
+                        self.split_quartic(piece, proj.w.0, size);
+                    }
+                }
+                Verdict::Unknown => self.split_quartic(piece, proj.w.0, size),
+            },
             Shape::Bezier(g) => {
-                let q: [[f64; 2]; 16] = std::array::from_fn(|i| proj.q[i]);
-                match krawczyk(&q, proj.pad) {
+                match krawczyk::<4>(&proj.q, proj.pad) {
                     Verdict::Exclude => {}
                     Verdict::Unique { lo, hi } => {
                         let (s, t) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
@@ -494,7 +532,8 @@ impl Search<'_> {
                 self.tracer.table.split_hull(piece, &mut kids);
                 if kids.is_empty() || size <= self.tol {
                     // At an irregular vertex, below any depth evaluation uses.
-                    if !self.newton(piece, 0.5, 0.5, proj.w, None) {
+                    let (s, t) = piece.centre();
+                    if !self.newton(piece, s, t, proj.w, None) {
                         self.graze(proj.w.0, size);
                     }
                     return;
@@ -502,6 +541,19 @@ impl Search<'_> {
                 for kid in kids {
                     self.push_piece(kid);
                 }
+            }
+        }
+    }
+
+    /// Splits a quartic piece, or records it as undecided below the splits' depth.
+    fn split_quartic(&mut self, piece: &Piece, w: f64, size: f64) {
+        if piece.depth >= MAX_BEZIER_DEPTH || size <= self.tol {
+            self.graze(w, size);
+        } else {
+            let mut kids = Vec::with_capacity(4);
+            piece.split_quartic(&mut kids);
+            for kid in kids {
+                self.push_piece(kid);
             }
         }
     }
@@ -521,12 +573,29 @@ impl Search<'_> {
     ) -> bool {
         let table = &self.tracer.table;
         let r = &self.r;
-        let [mut u, mut v] = piece.face_uv(s0, t0);
-        let at = |u: f64, v: f64| {
-            FaceCoord::new(piece.face, piece.k, u.clamp(0.0, 1.0), v.clamp(0.0, 1.0))
+        let triangles = self.tracer.triangles;
+        // Parameters kept in the domain: the unit square, or the triangle u, v ≥ 0, u + v ≤ 1.
+        let clamp = |u: f64, v: f64| -> (f64, f64) {
+            let (u, v) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
+            if triangles && u + v > 1.0 {
+                let s = u + v;
+                (u / s, v / s)
+            } else {
+                (u, v)
+            }
         };
+        let eval = |u: f64, v: f64| {
+            let at = FaceCoord::new(piece.face, piece.k, u, v);
+            if triangles {
+                table.eval_triangle(at)
+            } else {
+                table.eval(at)
+            }
+        };
+        let [u0, v0] = piece.face_uv(s0, t0);
+        let (mut u, mut v) = clamp(u0, v0);
         // Start t: the ray's closest point to the surface point.
-        let Ok(first) = table.eval(at(u, v)) else {
+        let Ok(first) = eval(u, v) else {
             return false;
         };
         let x: [f64; 3] = std::array::from_fn(|c| first.p[c] - r.o[c]);
@@ -551,10 +620,12 @@ impl Search<'_> {
                 break;
             }
             let mf = f.map(|x| -x);
-            u = (u + dot(mf, cross(sample.dv, nd)) / det).clamp(0.0, 1.0);
-            v = (v + dot(sample.du, cross(mf, nd)) / det).clamp(0.0, 1.0);
+            (u, v) = clamp(
+                u + dot(mf, cross(sample.dv, nd)) / det,
+                v + dot(sample.du, cross(mf, nd)) / det,
+            );
             t += dot(sample.du, cross(sample.dv, mf)) / det;
-            match table.eval(at(u, v)) {
+            match eval(u, v) {
                 Ok(x) => sample = x,
                 Err(_) => break,
             }
@@ -572,6 +643,10 @@ impl Search<'_> {
                 let st = piece.local_st(u, v);
                 let m = 2f64.powi(-20);
                 if (0..2).any(|i| !(st[i] >= lo[i] - m && st[i] <= hi[i] + m)) {
+                    return false;
+                }
+                // A quartic piece's zero counts only on its triangle.
+                if !piece.holds(st[0], st[1]) {
                     return false;
                 }
             }
@@ -644,6 +719,12 @@ impl ExactTracer {
             return false;
         }
         let eps = 2f64.powi(-30);
+        if self.triangles {
+            let on = [v <= eps, u + v >= 1.0 - eps, u <= eps];
+            let corner = [on[2] && on[0], on[0] && on[1], on[1] && on[2]];
+            return (0..3)
+                .any(|i| (on[i] && bits & (1 << i) != 0) || (corner[i] && bits & (16 << i) != 0));
+        }
         let on = [v <= eps, u >= 1.0 - eps, v >= 1.0 - eps, u <= eps];
         let corner = [
             on[3] && on[0],

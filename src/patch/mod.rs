@@ -11,6 +11,7 @@ pub mod bspline;
 pub mod local;
 pub mod loop_box;
 pub mod loop_surface;
+pub mod quartic;
 pub mod regular;
 pub mod single_crease;
 pub mod stam;

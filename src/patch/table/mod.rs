@@ -21,6 +21,7 @@
 mod build;
 mod end_cap;
 mod eval;
+pub mod loop_pieces;
 pub mod pieces;
 pub(crate) mod tree;
 

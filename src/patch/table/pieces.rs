@@ -22,6 +22,7 @@ use super::{PatchKind, PatchTable};
 use crate::patch::bezier::{self, BezierGrid};
 use crate::patch::bspline::ControlGrid;
 use crate::patch::local::{child_face, LocalMesh};
+use crate::patch::quartic::{self, QuarticGrid};
 use crate::patch::regular::{classify, Combo, RegularKind};
 use crate::patch::single_crease::SingleCreasePatch;
 use crate::patch::stam::MAX_DEPTH;
@@ -60,6 +61,24 @@ pub enum Shape {
     /// A face of an end cap's on-demand subdivision that is still irregular: face 0 of `mesh`
     /// (its two-ring, positions as data); its surface lies in the hull of the mesh's points.
     Cap(Box<LocalMesh>),
+    /// Exactly the quartic of this tensor grid over the piece's `(s, t)`, a part of a regular
+    /// Loop patch ([`crate::patch::quartic`]). The piece's square lies in the square of the
+    /// patch's triangle, and only its part where `c + h (s + t) ≤ 1` is the triangle's: the
+    /// rest is the polynomial continued beyond it (not the surface).
+    Quartic {
+        /// The Bernstein points over the piece's square.
+        grid: Box<QuarticGrid>,
+        /// `s + t` of the triangle's parameter at the square's corner `(0, 0)`.
+        c: f64,
+        /// The square's side in the triangle's parameter.
+        h: f64,
+        /// A bound on the rounding of the grid's points (absolute).
+        pad: f64,
+    },
+    /// A triangle of a Loop cut-out that is still irregular: face 0 of `mesh` (its two-ring,
+    /// positions as data). The piece's `(s, t)` is that triangle's parameter; its surface lies
+    /// in the hull of the mesh's points (Loop's rules have non-negative weights).
+    LoopCap(Box<LocalMesh>),
 }
 
 impl Piece {
@@ -68,12 +87,39 @@ impl Piece {
         match &self.shape {
             Shape::Bezier(g) => std::borrow::Cow::Borrowed(&g[..]),
             Shape::StamCorner { points, .. } => std::borrow::Cow::Borrowed(points),
-            Shape::Cap(mesh) => std::borrow::Cow::Owned(
+            Shape::Quartic { grid, .. } => std::borrow::Cow::Borrowed(&grid[..]),
+            Shape::Cap(mesh) | Shape::LoopCap(mesh) => std::borrow::Cow::Owned(
                 mesh.data
                     .chunks_exact(3)
                     .map(|c| [c[0], c[1], c[2]])
                     .collect(),
             ),
+        }
+    }
+
+    /// A bound on the rounding of [`Self::hull`]'s points beyond the splits' own (absolute).
+    pub fn pad(&self) -> f64 {
+        match &self.shape {
+            Shape::Quartic { pad, .. } => *pad,
+            _ => 0.0,
+        }
+    }
+
+    /// The middle of the piece's domain in its own `(s, t)`: the centroid of a triangle, the
+    /// centre of a square.
+    pub fn centre(&self) -> (f64, f64) {
+        match &self.shape {
+            Shape::LoopCap(_) => (1.0 / 3.0, 1.0 / 3.0),
+            _ => (0.5, 0.5),
+        }
+    }
+
+    /// Whether the piece's own `(s, t)` is on its surface: always for a square piece; for a
+    /// quartic piece, within its triangle's part (up to 2^-40 of the triangle's parameter).
+    pub fn holds(&self, s: f64, t: f64) -> bool {
+        match &self.shape {
+            Shape::Quartic { c, h, .. } => c + h * (s + t) <= 1.0 + 2f64.powi(-40),
+            _ => true,
         }
     }
 
@@ -98,29 +144,57 @@ impl Piece {
         ]
     }
 
+    /// The frame of quadrant `q` (the square's corners' order) of the piece's square.
+    fn quadrant(&self, q: usize) -> Frame {
+        // Quadrants keep the axes (unlike the table's rotated children).
+        let c = [0.5 * CORNER[q][0], 0.5 * CORNER[q][1]];
+        let f = &self.frame;
+        Frame {
+            o: [
+                f.o[0] + c[0] * f.a[0] + c[1] * f.b[0],
+                f.o[1] + c[0] * f.a[1] + c[1] * f.b[1],
+            ],
+            a: [0.5 * f.a[0], 0.5 * f.a[1]],
+            b: [0.5 * f.b[0], 0.5 * f.b[1]],
+        }
+    }
+
     /// The four quadrants of a Bézier piece.
     pub fn split_bezier(&self, g: &BezierGrid) -> [Piece; 4] {
         let kids = bezier::split(g);
-        let half = |q: usize| -> Frame {
-            // Quadrants keep the axes (unlike the table's rotated children).
-            let c = [0.5 * CORNER[q][0], 0.5 * CORNER[q][1]];
-            let f = &self.frame;
-            Frame {
-                o: [
-                    f.o[0] + c[0] * f.a[0] + c[1] * f.b[0],
-                    f.o[1] + c[0] * f.a[1] + c[1] * f.b[1],
-                ],
-                a: [0.5 * f.a[0], 0.5 * f.a[1]],
-                b: [0.5 * f.b[0], 0.5 * f.b[1]],
-            }
-        };
         std::array::from_fn(|q| Piece {
             face: self.face,
             k: self.k,
-            frame: half(q),
+            frame: self.quadrant(q),
             depth: self.depth.saturating_add(1),
             shape: Shape::Bezier(Box::new(kids[q])),
         })
+    }
+
+    /// Pushes the quadrants of a quartic piece that hold part of its triangle.
+    pub fn split_quartic(&self, out: &mut Vec<Piece>) {
+        let Shape::Quartic { grid, c, h, pad } = &self.shape else {
+            return;
+        };
+        let kids = quartic::split(grid);
+        for (q, kid) in kids.into_iter().enumerate() {
+            let c = c + 0.5 * h * (CORNER[q][0] + CORNER[q][1]);
+            if c >= 1.0 {
+                continue;
+            }
+            out.push(Piece {
+                face: self.face,
+                k: self.k,
+                frame: self.quadrant(q),
+                depth: self.depth.saturating_add(1),
+                shape: Shape::Quartic {
+                    grid: Box::new(kid),
+                    c,
+                    h: 0.5 * h,
+                    pad: *pad,
+                },
+            });
+        }
     }
 }
 
@@ -271,8 +345,9 @@ impl PatchTable {
         }
     }
 
-    /// Pushes the children of a hull piece (nothing for Bézier pieces, which
-    /// [`Piece::split_bezier`] splits, and nothing below [`MAX_HULL_DEPTH`]).
+    /// Pushes the children of a hull piece (nothing for Bézier and quartic pieces, which
+    /// [`Piece::split_bezier`] and [`Piece::split_quartic`] split, and nothing below
+    /// [`MAX_HULL_DEPTH`]).
     pub fn split_hull(&self, piece: &Piece, out: &mut Vec<Piece>) {
         if piece.depth >= MAX_HULL_DEPTH {
             return;
@@ -318,6 +393,8 @@ impl PatchTable {
                     },
                 });
             }
+            Shape::Quartic { .. } => {}
+            Shape::LoopCap(mesh) => self.split_loop_cap(piece, mesh, out),
             Shape::Cap(mesh) => {
                 let sc = self.options.single_crease;
                 let refined = mesh.refine(self.method);
@@ -355,6 +432,6 @@ impl PatchTable {
 }
 
 /// Whether face 0 of a cut-out is a hole (it has no surface).
-fn is_hole(mesh: &LocalMesh) -> bool {
+pub(super) fn is_hole(mesh: &LocalMesh) -> bool {
     mesh.level.face_hole.first().copied().unwrap_or(false)
 }
