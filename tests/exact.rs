@@ -5,6 +5,10 @@
 //! a ray aimed at a surface point hits at or before it, and Newton's method started from the
 //! diced surface's hit (rate 16) finds no crossing in front of the exact first hit.
 //!
+//! The same checks run on the corpus's closed Loop shapes and random Loop meshes
+//! (`generate_loop`): there hits report the triangle's own `(u, v)` (`k = 0`), checked with
+//! `eval_triangle`, while the diced surface's hits are in its sub-quad parameters.
+//!
 //! Ray counts scale with `LIMITRAY_EXACT_RAYS` (rays per corpus shape, default 3000; the
 //! random meshes get a sixth of it each). `scripts/soak-exact.sh` runs more than 10^6 rays.
 
@@ -115,6 +119,7 @@ fn rays(table: &PatchTable, mesh: &ControlMesh, n: usize, seed: u64) -> Vec<(Ray
 
 fn check(name: &str, mesh: &ControlMesh, n: usize, seed: u64) -> Stats {
     let table = Arc::new(PatchTable::new(mesh, PatchOptions::default()).unwrap());
+    let triangles = table.loop_surface().is_some();
     let tracer = ExactTracer::new(table.clone(), mesh).unwrap();
     let diag = tracer.diagonal();
     let diced = dice(
@@ -141,9 +146,13 @@ fn check(name: &str, mesh: &ControlMesh, n: usize, seed: u64) -> Stats {
                 );
                 return (false, x.graze.is_some(), 0.0, 0.0);
             };
-            let s = table
-                .eval(FaceCoord::new(h.face, h.k, h.u, h.v))
-                .unwrap_or_else(|e| panic!("{name}: hit off the domain {h:?}: {e}"));
+            let at = FaceCoord::new(h.face, h.k, h.u, h.v);
+            let s = if triangles {
+                table.eval_triangle(at)
+            } else {
+                table.eval(at)
+            }
+            .unwrap_or_else(|e| panic!("{name}: hit off the domain {h:?}: {e}"));
             let q: [f64; 3] = std::array::from_fn(|c| ray.origin[c] + h.t * ray.dir[c]);
             let off = common::dist(&q, &s.p) / diag;
             assert!(
@@ -228,6 +237,80 @@ fn corpus_closed_shapes() {
     }
     eprintln!("{shapes} closed corpus shapes: {total:?}");
     assert!(shapes >= 25, "{shapes} closed shapes");
+}
+
+fn add(total: &mut Stats, st: &Stats) {
+    total.rays += st.rays;
+    total.hits += st.hits;
+    total.grazing += st.grazing;
+    total.worst_off = total.worst_off.max(st.worst_off);
+    total.worst_err = total.worst_err.max(st.worst_err);
+}
+
+/// The closed Loop corpus shapes (valence 3 to 360, creases, Chaikin, semi-sharp).
+#[test]
+fn corpus_closed_loop_shapes() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let n = rays_per_shape();
+    let mut total = Stats::default();
+    let mut shapes = 0;
+    for path in common::corpus_files(&models, "loop_") {
+        let mut mesh = read_obj(&path).unwrap();
+        mesh.options.scheme = limitray::mesh::Scheme::Loop;
+        if !common::closed(&mesh) {
+            continue;
+        }
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        let st = check(&name, &mesh, n, 23);
+        eprintln!("{name}: {st:?}");
+        assert!(st.grazing * 1000 <= st.rays.max(1000), "{name}: {st:?}");
+        assert!(st.hits * 4 >= st.rays, "{name}: {st:?}");
+        shapes += 1;
+        add(&mut total, &st);
+    }
+    eprintln!("{shapes} closed Loop corpus shapes: {total:?}");
+    assert!(shapes >= 10, "{shapes} closed Loop shapes");
+}
+
+/// Random Loop meshes: creases (uniform and Chaikin), corners, boundaries, holes,
+/// non-manifold vertices.
+#[test]
+fn random_loop_meshes() {
+    let features = Features {
+        smooth_triangles: false,
+        skip_chaikin_boundary_none: false,
+        nonmanifold: true,
+    };
+    let per = (rays_per_shape() / 6).max(50);
+    let (mut total, mut degenerate) = (Stats::default(), Stats::default());
+    for seed in 0..100u64 {
+        let g = oracle::gen::generate_loop(seed, features);
+        let mut mesh = parse_obj(&g.to_obj(), Some("generated")).unwrap();
+        mesh.options.scheme = limitray::mesh::Scheme::Loop;
+        if (0..mesh.num_faces()).all(|f| mesh.holes.contains(&(f as u32))) {
+            continue;
+        }
+        let st = check(
+            &format!("loop seed {seed} ({})", g.recipe),
+            &mesh,
+            per,
+            seed,
+        );
+        if g.recipe.contains("degenerate") {
+            // A triangle with a repeated vertex (`a b c c` split for Loop) has a zero-length
+            // edge: the surface folds flat there, and rays through the fold graze it (seen:
+            // up to 26 of 500 rays on such meshes, none elsewhere). Every hit is still
+            // checked above; only the share of grazing answers is allowed to be larger.
+            assert!(st.grazing * 10 <= st.rays, "loop seed {seed}: {st:?}");
+            add(&mut degenerate, &st);
+        } else {
+            add(&mut total, &st);
+        }
+    }
+    eprintln!("random Loop meshes: {total:?}; with a degenerate triangle: {degenerate:?}");
+    assert!(total.grazing * 1000 <= total.rays, "{total:?}");
 }
 
 #[test]

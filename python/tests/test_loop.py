@@ -54,6 +54,31 @@ def test_trace_from_inside_hits_and_is_the_cli(cli, surface):
         assert float(tok[4]) == h["u"][i] and float(tok[5]) == h["v"][i], line
 
 
+def test_exact_trace_is_the_cli_and_on_the_surface(cli):
+    s = limitray.Surface(BLOB, scheme="loop")
+    rng = np.random.default_rng(11)
+    n = 300
+    d = rng.normal(size=(n, 3))
+    o = np.zeros((n, 3))
+    h = s.trace(o, d, exact=True)
+    # The blob is closed around the origin: every ray hits, in the triangle's own (u, v).
+    assert h["hit"].all()
+    assert np.all(h["k"] == 0) and np.all(h["u"] + h["v"] <= 1 + 1e-12)
+    # On the exact surface at the reported parameters (1e-12 of the diagonal, the reference
+    # intersector's bound; the blob's diagonal is about 3).
+    at = s.eval(h["face"], h["u"], h["v"])
+    gap = np.linalg.norm(o + h["t"][:, None] * d - at["p"], axis=1)
+    assert gap.max() < 3e-12, gap.max()
+    stdin = "".join(f"0 0 0 {float(a)!r} {float(b)!r} {float(c)!r}\n" for a, b, c in d)
+    proc = cli(["trace", BLOB, "--scheme", "loop", "--exact"], stdin)
+    assert proc.returncode == 0, proc.stderr
+    for i, line in enumerate(proc.stdout.splitlines()):
+        tok = line.split()
+        assert tok[0] == "hit" and int(tok[2]) == h["face"][i] and tok[3] == "0", line
+        # The CLI prints 17 significant digits: the same f64.
+        assert float(tok[1]) == h["t"][i] and float(tok[4]) == h["u"][i], line
+
+
 def test_limit_refinement_is_the_cli(cli, tmp_path):
     s = limitray.Surface(BLOB, scheme="loop")
     pos, faces = s.refine(1, limit=True)
