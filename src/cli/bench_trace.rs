@@ -31,6 +31,11 @@ pub struct TraceBenchArgs {
     /// The surface of a Loop mesh: exact, or paper 002's pn, wm or gregory approximation.
     #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
     pub surface: SurfaceArg,
+    /// Measure the reference intersector (`trace --exact`) instead of the diced surface: the
+    /// same rays (widened to f64), closest hits only; `--rate` then only picks the rays' box
+    /// (the diced surface's at rate 1, as without `--exact`).
+    #[arg(long)]
+    pub exact: bool,
 }
 
 /// Median of wall-clock seconds of `reps` runs of `f`.
@@ -56,6 +61,12 @@ fn round(x: f64, digits: i32) -> f64 {
 pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
     let (_, mesh) = args.source.load()?;
     let threads = args.threads.count();
+    if args.exact {
+        return args
+            .threads
+            .pool()?
+            .install(|| exact_bench(args, &mesh, threads));
+    }
     args.threads.pool()?.install(|| {
         let t0 = std::time::Instant::now();
         let table = PatchTable::with_options(
@@ -124,6 +135,76 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
         out["incoherent_anyhit_mrays_per_s"] = round(rays.len() as f64 / med / 1e6, 3).into();
         Ok(out)
     })
+}
+
+/// `bench-trace --exact`: the reference intersector's build (patch table, pieces and their
+/// hierarchy) and closest-hit rays/s on the rays the diced bench traces.
+fn exact_bench(
+    args: &TraceBenchArgs,
+    mesh: &crate::mesh::ControlMesh,
+    threads: usize,
+) -> Result<serde_json::Value> {
+    let options = args.rules.options(mesh);
+    let t0 = std::time::Instant::now();
+    let table = std::sync::Arc::new(PatchTable::with_options(
+        mesh,
+        options,
+        PatchOptions {
+            surface: args.surface.into(),
+            ..PatchOptions::default()
+        },
+    )?);
+    let t1 = std::time::Instant::now();
+    let tracer = crate::exact::ExactTracer::new(table.clone(), mesh)?;
+    let t2 = std::time::Instant::now();
+    // The rays' box: the limit surface's, as the diced bench has it (dicing not timed).
+    let coarse = dice(
+        &table,
+        mesh,
+        &DiceOptions {
+            rate: DiceRate::Uniform(1),
+            max_rate: 1024,
+        },
+    )?;
+    let mut bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+    for p in &coarse.positions {
+        for c in 0..3 {
+            bounds[0][c] = bounds[0][c].min(p[c]);
+            bounds[1][c] = bounds[1][c].max(p[c]);
+        }
+    }
+    let ms = |a: std::time::Instant, b: std::time::Instant| round((b - a).as_secs_f64() * 1e3, 1);
+    let mut out = serde_json::json!({
+        "engine": "exact",
+        "threads": threads,
+        "table_ms": ms(t0, t1),
+        "pieces_ms": ms(t1, t2),
+        "pieces": tracer.num_pieces(),
+    });
+    for (name, rays) in [
+        ("coherent", camera_rays(bounds, args.rays)),
+        ("incoherent", random_rays(bounds, args.rays, 11)),
+    ] {
+        let rays: Vec<crate::bvh::Ray64> = rays.iter().map(|r| r.into()).collect();
+        let mut hits = 0;
+        let mut grazing = 0;
+        let med = median_secs(args.reps, || {
+            let answers: Vec<_> = rays
+                .par_iter()
+                .with_min_len(16)
+                .map(|r| tracer.trace(r))
+                .collect();
+            hits = answers.iter().filter(|a| a.hit.is_some()).count();
+            grazing = answers
+                .iter()
+                .filter(|a| a.graze.is_some() || a.hit.is_some_and(|h| h.grazing))
+                .count();
+        });
+        out[format!("{name}_mrays_per_s")] = round(rays.len() as f64 / med / 1e6, 4).into();
+        out[format!("{name}_hits")] = hits.into();
+        out[format!("{name}_grazing")] = grazing.into();
+    }
+    Ok(out)
 }
 
 /// Runs `limitray bench-trace`: one JSON line on stdout.
