@@ -3,6 +3,8 @@
 //! exactly, corners interpolating the exact limit, and the approximations close to the exact
 //! surface.
 
+mod common;
+
 use limitray::mesh::{shapes, ControlMesh, MeshBuilder, Options, Scheme};
 use limitray::patch::approx::{Approximation, TriApprox};
 use limitray::patch::LoopSurface;
@@ -188,4 +190,53 @@ fn approximations_interpolate_corners_and_stay_close() {
             assert!(worst < 5e-2, "{name} {kind}: {worst}");
         }
     }
+}
+
+/// Every corpus Loop shape (creases, corners, boundaries, non-manifold, poles): each
+/// approximation stays near the exact surface at the same parameter, at 7 points per face:
+/// within half the control mesh's diagonal. This is a sanity bound, not an accuracy one.
+/// Sharp corners have no tangent plane, so their edge points can coincide with their vertex.
+/// When the construction divided by such a vanishing tangent, loop_cubes_infsharp's Gregory
+/// points landed 8e6 diagonals away.
+#[test]
+fn corpus_approximations_stay_near_the_surface() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mut shapes = 0;
+    for path in common::corpus_files(&models, "loop_") {
+        let Ok(m) = limitray::mesh::obj::read_obj(&path) else {
+            continue;
+        };
+        let Ok(exact) = LoopSurface::new(&m, loop_opts(&m)) else {
+            continue;
+        };
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        let diag = m.diagonal();
+        shapes += 1;
+        for kind in [Approximation::Pn, Approximation::Wm, Approximation::Gregory] {
+            let s = TriApprox::new(&exact, kind).unwrap();
+            let mut worst = 0.0f64;
+            for face in 0..s.num_faces() as u32 {
+                for (u, v) in [
+                    (0.0, 0.0),
+                    (0.5, 0.0),
+                    (0.0, 0.5),
+                    (0.5, 0.5),
+                    (1.0 / 3.0, 1.0 / 3.0),
+                    (0.1, 0.8),
+                    (0.8, 0.1),
+                ] {
+                    let at = FaceCoord::new(face, 0, u, v);
+                    let (Ok(a), Ok(b)) = (s.eval(at), exact.eval(at)) else {
+                        continue;
+                    };
+                    worst = worst.max(norm(sub(a.p, b.p)) / diag);
+                }
+            }
+            println!("{name} {kind}: worst same-parameter distance {worst:.3e} of the diagonal");
+            assert!(worst < 0.5, "{name} {kind}: {worst} diagonals from the surface");
+        }
+    }
+    println!("{shapes} corpus shapes");
 }

@@ -296,11 +296,15 @@ fn edge_data(
     }))
 }
 
-/// Coefficients `(α, β)` of `d = α t + β r` for `t ⟂ r` (zero where either vanishes).
+/// Coefficients `(α, β)` of `d = α t + β r` for `t ⟂ r`; zero for a vector that vanishes
+/// against `d` (shorter than 1e-6 |d|: rounding, e.g. an edge point that the tangent plane
+/// at a sharp corner puts on its vertex, whose α would otherwise be ~1e8 and throw the
+/// interior points millions of diagonals away).
 pub(super) fn decompose(d: [f64; 3], t: [f64; 3], r: [f64; 3]) -> (f64, f64) {
+    let floor = 1e-12 * dot(d, d);
     let (tt, rr) = (dot(t, t), dot(r, r));
-    let a = if tt > 0.0 { dot(d, t) / tt } else { 0.0 };
-    let b = if rr > 0.0 { dot(d, r) / rr } else { 0.0 };
+    let a = if tt > floor && tt > 0.0 { dot(d, t) / tt } else { 0.0 };
+    let b = if rr > floor && rr > 0.0 { dot(d, r) / rr } else { 0.0 };
     (a, b)
 }
 
