@@ -61,7 +61,8 @@ fn too_thin(m: &ControlMesh) -> Option<(f64, f64)> {
 /// `LIMITRAY_LEAKS_ONLY=name` (a substring) restricts the corpus tests to matching shapes,
 /// to reproduce one case quickly (and waives the case-count checks); unset, every shape runs.
 fn selected(name: &str) -> bool {
-    std::env::var("LIMITRAY_LEAKS_ONLY").map_or(true, |only| !only.is_empty() && name.contains(&only))
+    std::env::var("LIMITRAY_LEAKS_ONLY")
+        .map_or(true, |only| !only.is_empty() && name.contains(&only))
 }
 
 fn translated(mesh: &ControlMesh, by: [f64; 3]) -> ControlMesh {

@@ -235,7 +235,10 @@ fn corpus_approximations_stay_near_the_surface() {
                 }
             }
             println!("{name} {kind}: worst same-parameter distance {worst:.3e} of the diagonal");
-            assert!(worst < 0.5, "{name} {kind}: {worst} diagonals from the surface");
+            assert!(
+                worst < 0.5,
+                "{name} {kind}: {worst} diagonals from the surface"
+            );
         }
     }
     println!("{shapes} corpus shapes");

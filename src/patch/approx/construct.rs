@@ -303,8 +303,16 @@ fn edge_data(
 pub(super) fn decompose(d: [f64; 3], t: [f64; 3], r: [f64; 3]) -> (f64, f64) {
     let floor = 1e-12 * dot(d, d);
     let (tt, rr) = (dot(t, t), dot(r, r));
-    let a = if tt > floor && tt > 0.0 { dot(d, t) / tt } else { 0.0 };
-    let b = if rr > floor && rr > 0.0 { dot(d, r) / rr } else { 0.0 };
+    let a = if tt > floor && tt > 0.0 {
+        dot(d, t) / tt
+    } else {
+        0.0
+    };
+    let b = if rr > floor && rr > 0.0 {
+        dot(d, r) / rr
+    } else {
+        0.0
+    };
     (a, b)
 }
 
