@@ -766,3 +766,54 @@ fn approximations_through_the_cli() {
         "{err}"
     );
 }
+
+/// `refine` honours hierarchical edits as Hbr does: catmark_square_hedit0 at 2, 3 and 4 steps
+/// equals Hbr's baselines (point sets within 1e-6 of the diagonal; the baselines print 9
+/// digits of Hbr's single precision), where a level's own edits show only once it is refined
+/// further; `--level-edits` applies them (the level-2 edit raises 4 points by 1).
+#[test]
+fn refine_honours_hierarchical_edits_like_hbr() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let dir = TempDir::new("hedit");
+    let mesh = models.join("opensubdiv/catmark_square_hedit0.obj");
+    let points = |text: &str| -> Vec<[f64; 3]> {
+        text.lines()
+            .filter(|l| l.starts_with("v "))
+            .map(|l| {
+                let x: Vec<f64> = l[2..]
+                    .split_whitespace()
+                    .map(|t| t.parse().unwrap())
+                    .collect();
+                [x[0], x[1], x[2]]
+            })
+            .collect()
+    };
+    for steps in 2..=4 {
+        let level = steps.to_string();
+        let ours = points(&refine_to_file(&dir, &mesh, "r.obj", &["--level", &level]));
+        let base = models.join(format!(
+            "opensubdiv-hbr-baseline/catmark_square_hedit0_level{}.obj",
+            steps - 1
+        ));
+        let theirs = common::read_points(&base);
+        let diag = 2f64.sqrt() * 2.0;
+        let d = common::max_nearest_distance(&ours, &theirs)
+            .max(common::max_nearest_distance(&theirs, &ours));
+        assert!(d <= 1e-6 * diag, "level {steps}: {d}");
+        let edited = points(&refine_to_file(
+            &dir,
+            &mesh,
+            "e.obj",
+            &["--level", &level, "--level-edits"],
+        ));
+        let moved = ours
+            .iter()
+            .zip(&edited)
+            .filter(|(a, b)| common::dist(a, b) > 0.5)
+            .count();
+        // The level-1 edit is already in both; levels 2 and 3 each edit 4 vertices.
+        assert_eq!(moved, if steps == 4 { 0 } else { 4 }, "level {steps}");
+    }
+}

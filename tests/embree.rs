@@ -81,11 +81,11 @@ const DIFFERENT: &[(&str, &str)] = &[
     ("catmark_val2_interior", "vertices of valence 2 (1.2e-2)"),
     ("catmark_val2_nonman", "valence 2, non-manifold (9.8e-2)"),
     ("catmark_single_crease", "fractional crease sharpness 2.0 to 5.7 (1.6e-2)"),
-    ("catmark_square_hedit0", "edge-only boundary vs SMOOTH_BOUNDARY (1.8e-3)"),
-    ("catmark_square_hedit1", "edge-only boundary vs SMOOTH_BOUNDARY (1.8e-3)"),
-    ("catmark_square_hedit2", "edge-only boundary vs SMOOTH_BOUNDARY (1.8e-3)"),
-    ("catmark_square_hedit3", "edge-only boundary vs SMOOTH_BOUNDARY (1.8e-3)"),
-    ("catmark_square_hedit4", "edge-only boundary vs SMOOTH_BOUNDARY (1.8e-3)"),
+    ("catmark_square_hedit0", "hierarchical edits (Embree has none); edge-only boundary"),
+    ("catmark_square_hedit1", "hierarchical edits (Embree has none); edge-only boundary"),
+    ("catmark_square_hedit2", "hierarchical edits (Embree has none); edge-only boundary"),
+    ("catmark_square_hedit3", "hierarchical edits (Embree has none); edge-only boundary"),
+    ("catmark_square_hedit4", "hierarchical edits (Embree has none); edge-only boundary"),
     ("catmark_tent", "edge-only boundary vs SMOOTH_BOUNDARY (1.5e-3)"),
 ];
 

@@ -240,3 +240,128 @@ proptest! {
         }
     }
 }
+
+/// One hierarchical edit tag from fuzzed parts: kind, path ints (lengths and indices that
+/// may leave the mesh), values (hostile numbers included) and operation; three times in four
+/// well-formed (values as many as the paths need), so that most cases reach the pipeline.
+fn edit_tag() -> impl Strategy<Value = String> {
+    let value = prop_oneof![
+        Just("0.5".to_string()),
+        Just("-3".to_string()),
+        Just("2".to_string()),
+        Just("1e300".to_string()),
+        coordinate()
+    ];
+    let tag = |kind: &str, ints: &[u32], floats: &[String], op: &str| {
+        let strings: Vec<&str> = op.split(' ').collect();
+        let mut t = format!("t {kind} {}/{}/{}", ints.len(), floats.len(), strings.len());
+        for i in ints {
+            t.push_str(&format!(" {i}"));
+        }
+        for f in floats {
+            t.push_str(&format!(" {f}"));
+        }
+        for s in &strings {
+            t.push_str(&format!(" {s}"));
+        }
+        t
+    };
+    let kind = prop_oneof![Just("vertexedit"), Just("edgeedit"), Just("faceedit")];
+    let ints = proptest::collection::vec(prop_oneof![0u32..6, Just(7), Just(4_000_000_000)], 0..9);
+    let floats = proptest::collection::vec(value, 0..7);
+    let op = prop_oneof![
+        Just("add P value"),
+        Just("set P value"),
+        Just("set P sharpness"),
+        Just("subtract P sharpness"),
+        Just("hole"),
+        Just("add st value"),
+        Just("multiply P value"),
+    ];
+    let random = (kind, ints, floats, op).prop_map(move |(k, i, f, o)| tag(k, &i, &f, o));
+    // (kind, operation, values per path, paths carry an element)
+    let form = prop_oneof![
+        Just(("vertexedit", "add P value", 3usize, true)),
+        Just(("vertexedit", "set P value", 3, true)),
+        Just(("vertexedit", "set P sharpness", 1, true)),
+        Just(("edgeedit", "add P sharpness", 1, true)),
+        Just(("faceedit", "hole", 0, false)),
+    ];
+    // Paths: face, 1–3 sub-faces, element, inside the mesh (the random tags leave it).
+    let path = (0u32..6, proptest::collection::vec(0u32..4, 1..4), 0u32..4);
+    let paths = proptest::collection::vec(path, 1..3);
+    let pool = proptest::collection::vec(
+        prop_oneof![
+            Just("0.5".to_string()),
+            Just("-3".to_string()),
+            Just("2".to_string()),
+            Just("12".to_string())
+        ],
+        6,
+    );
+    let formed = (form, paths, pool).prop_map(move |((kind, op, width, element), paths, pool)| {
+        let mut ints = Vec::new();
+        for (f, subs, x) in &paths {
+            ints.push(subs.len() as u32 + 1 + element as u32);
+            ints.push(*f);
+            ints.extend(subs);
+            if element {
+                ints.push(*x);
+            }
+        }
+        let floats: Vec<String> = (0..width * paths.len())
+            .map(|i| pool[i % 6].clone())
+            .collect();
+        tag(kind, &ints, &floats, op)
+    });
+    prop_oneof![1 => random, 3 => formed]
+}
+
+/// Fuzzed edit sets that parsed with at least one edit (the property must reach the pipeline).
+static ACCEPTED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+#[test]
+fn hierarchical_edit_fuzzing_reaches_the_pipeline() {
+    hierarchical_edits_through_the_pipeline();
+    let n = ACCEPTED.load(std::sync::atomic::Ordering::Relaxed);
+    println!("{n} of 200 fuzzed edit sets parsed");
+    assert!(n >= 50, "only {n} fuzzed edit sets parsed");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Fuzzed hierarchical edits on a cube with a pentagon: refused at load with an error, or
+    /// honoured by refinement and the patch table (an evaluation and dicing) without a panic
+    /// and with finite results.
+    #[test]
+    fn hierarchical_edits_through_the_pipeline(tags in proptest::collection::vec(edit_tag(), 1..4)) {
+        let mut text = String::from(
+            "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 -1\nv 1 -1 -1\nv 0 1.5 0\n\
+             f 1 2 4 3\nf 3 4 6 9 5\nf 5 6 8 7\nf 7 8 2 1\nf 2 8 6 4\nf 7 1 3 5\n",
+        );
+        for t in &tags {
+            text.push_str(t);
+            text.push('\n');
+        }
+        let Ok(mesh) = parse_obj(&text, Some("fuzz.obj")) else {
+            return Ok(());
+        };
+        if !mesh.edits.is_empty() {
+            ACCEPTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        if let Ok(r) = limitray::refine::Refiner::new(&mesh, 4) {
+            let p = r.refine_positions(&mesh.positions, 4);
+            prop_assert!(p.iter().flatten().all(|c| c.is_finite()));
+        }
+        let Ok(table) = PatchTable::new(&mesh, PatchOptions::default()) else {
+            return Ok(());
+        };
+        if let Ok(s) = table.eval(limitray::FaceCoord::new(0, 0, 0.3, 0.6)) {
+            prop_assert!(s.p.iter().all(|c| c.is_finite()));
+        }
+        if let Ok(d) = dice(&table, &mesh, &DiceOptions { rate: DiceRate::Uniform(4), max_rate: 8 }) {
+            prop_assert!(d.positions.iter().flatten().all(|c| c.is_finite()));
+        }
+    }
+}

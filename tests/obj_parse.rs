@@ -268,19 +268,125 @@ fn tag_creasemethod() {
 }
 
 #[test]
-fn hierarchical_edits_warn() {
+fn hierarchical_edits_are_read() {
+    use limitray::mesh::{EditKind, EditOp, HierarchicalEdit};
     let text = format!(
-        "{CUBE}t vertexedit 4/3/3 1 0 1 0 0 0 1 add P value\n\
-         t edgeedit 4/1/3 1 0 1 0 10 set P sharpness\n\
-         t faceedit 4/0/1 1 0 1 1 hole\n"
+        "{CUBE}t vertexedit 3/3/3 2 0 1 0 0 1 add P value\n\
+         t edgeedit 8/2/3 3 2 3 1 3 5 2 0 2.5 10 set P sharpness\n\
+         t faceedit 4/0/1 3 4 1 1 hole\n\
+         t vertexedit 4/2/6 3 0 0 2 3 1 set P sharpness subtract P sharpness\n"
     );
     let m = ok(&text);
-    assert_eq!(m.warnings.len(), 3, "{:?}", m.warnings);
-    for (w, line) in m.warnings.iter().zip(15..) {
-        assert!(w.starts_with(&format!("test.obj:{line}:")), "{w}");
-        assert!(w.contains("hierarchical edits"), "{w}");
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+    let e = |face, path: &[u32], kind| HierarchicalEdit {
+        face,
+        path: path.to_vec(),
+        kind,
+    };
+    assert_eq!(
+        m.edits,
+        vec![
+            e(
+                0,
+                &[],
+                EditKind::Position {
+                    corner: 1,
+                    op: EditOp::Add,
+                    value: [0.0, 0.0, 1.0]
+                }
+            ),
+            e(
+                2,
+                &[3],
+                EditKind::EdgeSharpness {
+                    edge: 1,
+                    op: EditOp::Set,
+                    value: 2.5
+                }
+            ),
+            e(
+                5,
+                &[2],
+                EditKind::EdgeSharpness {
+                    edge: 0,
+                    op: EditOp::Set,
+                    value: 10.0
+                }
+            ),
+            e(4, &[1, 1], EditKind::Hole),
+            e(
+                0,
+                &[0],
+                EditKind::VertexSharpness {
+                    corner: 2,
+                    op: EditOp::Set,
+                    value: 3.0
+                }
+            ),
+            e(
+                0,
+                &[0],
+                EditKind::VertexSharpness {
+                    corner: 2,
+                    op: EditOp::Subtract,
+                    value: 1.0
+                }
+            ),
+        ]
+    );
+    assert_eq!(m.provenance.edit_lines, vec![15, 16, 16, 17, 18, 18]);
+}
+
+#[test]
+fn malformed_hierarchical_edits() {
+    // Path running past the ints, too short, bad operation, too few floats.
+    for (tag, msg) in [
+        ("t vertexedit 4/3/3 5 0 1 0 0 0 1 add P value", "runs past"),
+        ("t vertexedit 1/0/3 1 add P value", "too short"),
+        (
+            "t vertexedit 3/3/3 2 0 1 0 0 1 multiply P value",
+            "unknown operation",
+        ),
+        ("t vertexedit 3/2/3 2 0 1 0 0 add P value", "need 3 floats"),
+        ("t vertexedit 3/3/2 2 0 1 0 0 1 add P", "triples"),
+    ] {
+        let e = err(&format!("{CUBE}{tag}\n"));
+        check(&e, ErrorKind::Parse, 15, "tag vertexedit");
+        assert!(e.to_string().contains(msg), "{tag}: {e}");
     }
-    assert!(m.creases.is_empty() && m.holes.is_empty());
+    // Paths that leave the mesh: the face, a sub-face, a corner, an edge.
+    for (tag, msg) in [
+        (
+            "t vertexedit 3/3/3 2 6 1 0 0 1 add P value",
+            "face 6 is out of range",
+        ),
+        ("t faceedit 4/0/1 3 0 1 4 hole", "sub-face 4 at depth 2"),
+        ("t vertexedit 4/3/3 3 0 1 4 0 0 1 add P value", "corner 4"),
+        ("t edgeedit 4/1/3 3 0 1 7 2 set P sharpness", "edge 7"),
+    ] {
+        let e = err(&format!("{CUBE}{tag}\n"));
+        check(&e, ErrorKind::Topology, 15, "hierarchical edit 1");
+        assert!(e.to_string().contains(msg), "{tag}: {e}");
+    }
+    // Hbr's files carry more floats than they use (catmark_square_hedit0): a warning.
+    let m = ok(&format!(
+        "{CUBE}t vertexedit 3/6/3 2 0 1 0 0 1 0 0 1 add P value\n"
+    ));
+    assert_eq!(m.edits.len(), 1);
+    assert!(
+        m.warnings[0].contains("the first 3 used"),
+        "{:?}",
+        m.warnings
+    );
+    // Edits of other primvars are ignored with a warning.
+    let m = ok(&format!(
+        "{CUBE}t vertexedit 3/2/3 2 0 1 0.5 0.5 set st value\n"
+    ));
+    assert!(
+        m.edits.is_empty() && m.warnings[0].contains("not supported"),
+        "{:?}",
+        m.warnings
+    );
 }
 
 #[test]
@@ -676,7 +782,7 @@ t corner 1/1/0 3 4
 t hole 1/0/0 5
 t interpolateboundary 1/0/0 2
 t creasemethod 0/0/1 chaikin
-t vertexedit 4/3/3 1 0 1 0 0 0 1 add P value
+t vertexedit 3/3/3 2 0 1 0 0 1 add P value
 ec 3 1 2
 ";
 
@@ -803,10 +909,12 @@ fn tagged_template_parses() {
     assert_eq!(m.holes, vec![5]);
     assert_eq!(m.options.boundary, BoundaryInterpolation::EdgeOnly);
     assert_eq!(m.options.crease_method, CreaseMethod::Chaikin);
-    // Some faces have vt indices and others not: dropped with a warning; plus the edit, and
-    // `ec 3 1 2` repeating the edge 0-1 of the first crease tag (the later value is used).
+    // Some faces have vt indices and others not: dropped with a warning; and `ec 3 1 2`
+    // repeating the edge 0-1 of the first crease tag (the later value is used). The edit is
+    // read.
     assert!(m.face_uvs.is_empty());
-    assert_eq!(m.warnings.len(), 3, "{:?}", m.warnings);
+    assert_eq!(m.edits.len(), 1);
+    assert_eq!(m.warnings.len(), 2, "{:?}", m.warnings);
     assert!(
         m.warnings.iter().any(|w| w.starts_with(
             "test.obj:26: ec: the edge between vertices 0 and 1 (0-based) is already tagged \

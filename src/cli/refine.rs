@@ -25,6 +25,11 @@ pub struct RefineCmd {
     /// control points.
     #[arg(long)]
     pub limit: bool,
+    /// Apply the hierarchical position edits that act on the written level itself. Without
+    /// it, as in OpenSubdiv's Hbr, a level's points are written before that level's own
+    /// edits, which take effect when it is refined further (and in the limit, `--limit`).
+    #[arg(long)]
+    pub level_edits: bool,
 }
 
 /// Runs `limitray refine`.
@@ -37,7 +42,7 @@ pub fn run(args: &RefineCmd) -> Result<()> {
     for w in &r.warnings {
         eprintln!("warning: {w}");
     }
-    let mut pos = r.refine_positions(&m.positions, level);
+    let mut pos = r.refine_positions_with(&m.positions, level, args.level_edits || args.limit);
     let lvl = &r.levels[level];
     if args.limit {
         pos = match opts.scheme {

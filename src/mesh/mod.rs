@@ -2,12 +2,14 @@
 //! OBJ file ([`obj`]) or built in code ([`MeshBuilder`]), and its validated topology ([`topology`]).
 
 mod builder;
+pub mod edit;
 pub mod generate;
 pub mod obj;
 pub mod shapes;
 pub mod topology;
 
 pub use builder::MeshBuilder;
+pub use edit::{EditKind, EditOp, HierarchicalEdit};
 pub use topology::Topology;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -111,6 +113,8 @@ pub struct Provenance {
     pub corner_lines: Vec<u32>,
     /// 1-based line of each entry of `holes`.
     pub hole_lines: Vec<u32>,
+    /// 1-based line of each entry of `edits`.
+    pub edit_lines: Vec<u32>,
 }
 
 /// A control mesh with its tags. Faces have any number (≥ 3) of vertices, counter-clockwise.
@@ -132,6 +136,8 @@ pub struct ControlMesh {
     pub corners: Vec<VertexCorner>,
     /// Faces that are holes (not part of the surface).
     pub holes: Vec<u32>,
+    /// Hierarchical edits, in the order they apply ([`edit`]).
+    pub edits: Vec<HierarchicalEdit>,
     /// Boundary and crease options.
     pub options: Options,
     /// Where elements came from, for error messages.
@@ -182,6 +188,10 @@ impl ControlMesh {
             Element::Crease(i) => (p.crease_lines.get(i).copied(), "tag crease".to_string()),
             Element::Corner(i) => (p.corner_lines.get(i).copied(), "tag corner".to_string()),
             Element::Hole(i) => (p.hole_lines.get(i).copied(), "tag hole".to_string()),
+            Element::Edit(i) => (
+                p.edit_lines.get(i).copied(),
+                format!("hierarchical edit {}", i + 1),
+            ),
         };
         let mut e = Error::new(kind, message).element(name);
         if let Some(file) = &p.file {
@@ -333,6 +343,63 @@ impl ControlMesh {
                 ));
             }
         }
+        for i in 0..self.edits.len() {
+            self.validate_edit(i)?;
+        }
+        Ok(())
+    }
+
+    /// Checks edit `i`'s path against the faces it walks (Catmull-Clark children: a face of
+    /// `n` corners has `n` sub-faces, every sub-face is a quad) and its values.
+    fn validate_edit(&self, i: usize) -> Result<()> {
+        let e = &self.edits[i];
+        let bad = |m: String| Err(self.error_at(ErrorKind::Topology, Element::Edit(i), m));
+        if e.face as usize >= self.num_faces() {
+            return bad(format!(
+                "face {} is out of range (0-based, mesh has {} faces)",
+                e.face,
+                self.num_faces()
+            ));
+        }
+        if e.path.len() > crate::refine::MAX_LEVEL {
+            return bad(format!(
+                "path of {} sub-faces is deeper than the maximum level {}",
+                e.path.len(),
+                crate::refine::MAX_LEVEL
+            ));
+        }
+        let mut size = self.face_size(e.face as usize);
+        for (depth, &k) in e.path.iter().enumerate() {
+            if k as usize >= size {
+                return bad(format!(
+                    "sub-face {k} at depth {} does not exist (the face there has {size} corners)",
+                    depth + 1
+                ));
+            }
+            size = 4;
+        }
+        if let Some(x) = e.element() {
+            if x as usize >= size {
+                let what = if matches!(e.kind, EditKind::EdgeSharpness { .. }) {
+                    "edge"
+                } else {
+                    "corner"
+                };
+                return bad(format!("{what} {x} does not exist (the face has {size})"));
+            }
+        }
+        let finite = match e.kind {
+            EditKind::Position { value, .. } => value
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= crate::numeric::MAX_COORD),
+            EditKind::VertexSharpness { value, .. } | EditKind::EdgeSharpness { value, .. } => {
+                !value.is_nan()
+            }
+            EditKind::Hole => true,
+        };
+        if !finite {
+            return bad("value is not finite or out of range".to_string());
+        }
         Ok(())
     }
 }
@@ -350,6 +417,8 @@ pub enum Element {
     Corner(usize),
     /// Entry of `holes`.
     Hole(usize),
+    /// Entry of `edits`.
+    Edit(usize),
 }
 
 /// Axis-aligned bounds of a point set; zeros when empty.

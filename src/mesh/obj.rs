@@ -14,8 +14,9 @@
 //!   pairs or one per pair), `corner`, `hole`, `interpolateboundary` (0 none, 1 edge and
 //!   corner, 2 edge only), `creasemethod` (`chaikin`, `normal` or `uniform`) and
 //!   `smoothtriangles` (`smooth` or `catmark`, see [`crate::mesh::Options::smooth_triangles`]).
-//!   The hierarchical edits `vertexedit`, `edgeedit` and `faceedit` and the face-varying tags
-//!   are recognised and ignored with a warning.
+//!   The hierarchical edits `vertexedit` (positions, vertex sharpness), `edgeedit` (edge
+//!   sharpness) and `faceedit` (holes) are read into [`ControlMesh::edits`] (see
+//!   [`super::edit`]); the face-varying tags are recognised and ignored with a warning.
 //! * `ec s a b`: Embree's edge-crease extension: sharpness `s` on the edge between vertices `a`
 //!   and `b`, which are 1-based like `f` indices (negative ones relative to the vertices read
 //!   so far).
@@ -697,9 +698,7 @@ impl Parser {
                 Ok(())
             }
             "vertexedit" | "edgeedit" | "faceedit" => {
-                let msg = format!("{el}: hierarchical edits are not yet supported and are ignored");
-                self.warn_ignored(line, el, msg);
-                Ok(())
+                self.tag_edit(line, el, name, ints, floats, strings)
             }
             "smoothtriangles" => {
                 self.unused(line, el, &[ints, floats]);
@@ -881,6 +880,213 @@ impl Parser {
             let face = self.tag_index(line, el, t, "face")?;
             self.mesh.holes.push(face);
             self.mesh.provenance.hole_lines.push(l);
+        }
+        Ok(())
+    }
+
+    /// Hbr's hierarchical edit tags. The ints are paths, each `length face sub… [element]`
+    /// where `length` counts the face, the sub-face indices and (for vertex and edge edits)
+    /// the corner or edge index. The strings are triples `set|add|subtract VARIABLE value|sharpness`
+    /// (`faceedit` takes `hole`); the floats give each path the operations' values in turn
+    /// (3 for a position, 1 for a sharpness). Hbr's own files sometimes carry more floats than
+    /// the paths use: the first ones are used, as Hbr does, with a warning.
+    fn tag_edit(
+        &mut self,
+        line: usize,
+        el: &str,
+        name: &str,
+        ints: &[&str],
+        floats: &[&str],
+        strings: &[&str],
+    ) -> Result<()> {
+        use super::edit::{EditKind, EditOp, HierarchicalEdit};
+        let l = self.line32(line, el)?;
+        // The paths.
+        let mut paths: Vec<(u32, Vec<u32>, Option<u32>)> = Vec::new();
+        let mut i = 0;
+        while i < ints.len() {
+            let len = self.tag_index(line, el, ints[i], "path length")? as usize;
+            let has_element = name != "faceedit";
+            let min = 1 + has_element as usize;
+            if len < min || i + 1 + len > ints.len() {
+                return Err(self.err(
+                    line,
+                    el,
+                    format!(
+                        "path {} of length {} {}",
+                        paths.len() + 1,
+                        len,
+                        if len < min {
+                            format!("is too short (at least {min})")
+                        } else {
+                            format!("runs past the {} ints", ints.len())
+                        }
+                    ),
+                ));
+            }
+            let body = &ints[i + 1..i + 1 + len];
+            let face = self.tag_index(line, el, body[0], "face")?;
+            let subs_end = if has_element { len - 1 } else { len };
+            let subs = body[1..subs_end]
+                .iter()
+                .map(|t| self.tag_index(line, el, t, "sub-face"))
+                .collect::<Result<Vec<u32>>>()?;
+            let element = if has_element {
+                Some(self.tag_index(line, el, body[len - 1], "element")?)
+            } else {
+                None
+            };
+            paths.push((face, subs, element));
+            i += 1 + len;
+        }
+        // The operations.
+        enum Op {
+            Position(EditOp),
+            Sharpness(EditOp),
+            Hole,
+        }
+        let mut ops = Vec::new();
+        if name == "faceedit" {
+            for s in strings {
+                match unquote(s) {
+                    "hole" => ops.push(Op::Hole),
+                    other => {
+                        let msg = format!(
+                            "{el}: face edit {} ignored (only hole is supported)",
+                            quote(other)
+                        );
+                        self.warn_ignored(line, el, msg);
+                    }
+                }
+            }
+        } else {
+            if !strings.len().is_multiple_of(3) {
+                return Err(self.err(
+                    line,
+                    el,
+                    format!(
+                        "expected strings in triples (set|add|subtract, variable, value|sharpness), found {}",
+                        strings.len()
+                    ),
+                ));
+            }
+            for t in strings.chunks_exact(3) {
+                let op = match unquote(t[0]) {
+                    "set" => EditOp::Set,
+                    "add" => EditOp::Add,
+                    "subtract" => EditOp::Subtract,
+                    other => {
+                        return Err(self.err(
+                            line,
+                            el,
+                            format!(
+                                "unknown operation {} (expected set, add or subtract)",
+                                quote(other)
+                            ),
+                        ))
+                    }
+                };
+                let (var, what) = (unquote(t[1]), unquote(t[2]));
+                match (name, var, what) {
+                    ("vertexedit", "P", "value") => ops.push(Op::Position(op)),
+                    (_, _, "sharpness") => ops.push(Op::Sharpness(op)),
+                    _ => {
+                        // The values' layout depends on a primvar this reader does not know.
+                        let msg = format!(
+                            "{el}: edits of {} {} are not supported (positions and sharpness \
+                             are); the tag is ignored",
+                            quote(var),
+                            quote(what)
+                        );
+                        self.warn_ignored(line, el, msg);
+                        return Ok(());
+                    }
+                }
+            }
+        }
+        let width: usize = ops
+            .iter()
+            .map(|o| match o {
+                Op::Position(_) => 3,
+                Op::Sharpness(_) => 1,
+                Op::Hole => 0,
+            })
+            .sum();
+        let needed = width * paths.len();
+        if floats.len() < needed {
+            return Err(self.err(
+                line,
+                el,
+                format!(
+                    "{} paths with {width} values each need {needed} floats, found {}",
+                    paths.len(),
+                    floats.len()
+                ),
+            ));
+        }
+        if floats.len() > needed {
+            self.warn(
+                line,
+                format!(
+                    "{el}: {} floats given, the first {needed} used",
+                    floats.len()
+                ),
+            );
+        }
+        let values = floats[..needed]
+            .iter()
+            .map(|t| {
+                let x: f64 = t
+                    .parse()
+                    .map_err(|_| self.err(line, el, format!("invalid number {}", quote(t))))?;
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(self.err(line, el, format!("value {} is not finite", quote(t))))
+                }
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        let mut next = values.iter().copied();
+        for (face, path, element) in paths {
+            for op in &ops {
+                let x = element.unwrap_or(0);
+                let kind = match *op {
+                    Op::Position(op) => {
+                        let value = [(); 3].map(|_| next.next().unwrap_or(0.0));
+                        EditKind::Position {
+                            corner: x,
+                            op,
+                            value,
+                        }
+                    }
+                    Op::Sharpness(op) => {
+                        let value = next.next().unwrap_or(0.0) as f32;
+                        if op == EditOp::Set && value < 0.0 {
+                            return Err(self.err(
+                                line,
+                                el,
+                                format!("sharpness {value} is invalid (must be ≥ 0)"),
+                            ));
+                        }
+                        if name == "edgeedit" {
+                            EditKind::EdgeSharpness { edge: x, op, value }
+                        } else {
+                            EditKind::VertexSharpness {
+                                corner: x,
+                                op,
+                                value,
+                            }
+                        }
+                    }
+                    Op::Hole => EditKind::Hole,
+                };
+                self.mesh.edits.push(HierarchicalEdit {
+                    face,
+                    path: path.clone(),
+                    kind,
+                });
+                self.mesh.provenance.edit_lines.push(l);
+            }
         }
         Ok(())
     }

@@ -178,8 +178,4 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
     )
 }
 
-/// Index of child `k` of face `f` after [`crate::refine::step::refine`]: children are numbered by the parent's
-/// face-vertex slots.
-pub fn child_face(level: &Level, f: usize, k: usize) -> usize {
-    level.topo.face_offsets[f] as usize + k
-}
+pub use crate::refine::step::child_face;

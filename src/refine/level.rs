@@ -33,6 +33,7 @@ impl Level {
     /// face that is not a triangle is an error naming it (OpenSubdiv refuses such meshes too).
     pub fn base(mesh: &ControlMesh, options: &Options) -> Result<(Level, Vec<String>)> {
         mesh.validate()?;
+        super::edit::check_scheme(mesh, options.scheme)?;
         if options.scheme == Scheme::Loop {
             if let Some(f) = (0..mesh.num_faces()).find(|&f| mesh.face_size(f) != 3) {
                 return Err(mesh.error_at(

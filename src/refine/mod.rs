@@ -6,6 +6,7 @@
 //! animated mesh re-poses without re-analysis.
 
 pub mod crease;
+pub mod edit;
 pub mod level;
 pub mod limit;
 pub mod loop_rules;
@@ -68,6 +69,9 @@ pub struct Refiner {
     pub options: Options,
     /// Remarks made while building level 0 (ignored tags).
     pub warnings: Vec<String>,
+    /// The mesh's hierarchical position edits acting at each level (`position_edits[l]` for
+    /// level `l`), applied by [`Refiner::refine_positions`].
+    pub position_edits: Vec<Vec<edit::PositionEdit>>,
 }
 
 impl Refiner {
@@ -89,19 +93,23 @@ impl Refiner {
             estimate_bytes(mesh, max_level),
             "lower the level (--level)",
         )?;
-        let (base, warnings) = Level::base(mesh, &options)?;
+        let (mut base, warnings) = Level::base(mesh, &options)?;
+        edit::apply_tags(&[], &mut base, mesh);
         let mut levels = vec![base];
         let mut tables = Vec::with_capacity(max_level);
         for _ in 0..max_level {
-            let (child, table) = refine_once(levels.last().unwrap(), options.crease_method);
+            let (mut child, table) = refine_once(levels.last().unwrap(), options.crease_method);
+            edit::apply_tags(&levels, &mut child, mesh);
             levels.push(child);
             tables.push(table);
         }
+        let position_edits = edit::position_edits(&levels, mesh);
         Ok(Refiner {
             levels,
             tables,
             options,
             warnings,
+            position_edits,
         })
     }
 
@@ -130,10 +138,36 @@ impl Refiner {
         cur
     }
 
-    /// Positions of `level`, from control positions.
+    /// Positions of `level`, from control positions, with the mesh's hierarchical position
+    /// edits applied at each level as its points are made ([`edit`]), that level's own
+    /// included: the points the surface is refined from.
     pub fn refine_positions(&self, base: &[[f64; 3]], level: usize) -> Vec<[f64; 3]> {
-        let flat = self.interpolate(base.as_flattened(), 3, level);
-        flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        self.refine_positions_with(base, level, true)
+    }
+
+    /// [`Self::refine_positions`], with the position edits that act on `level` itself applied
+    /// or not. OpenSubdiv's Hbr writes a level's points before that level's own edits (they
+    /// take effect when it is refined further: its baselines of catmark_square_hedit0 show a
+    /// level-2 edit at 3 steps and not at 2); `false` reproduces those baselines.
+    pub fn refine_positions_with(
+        &self,
+        base: &[[f64; 3]],
+        level: usize,
+        own_edits: bool,
+    ) -> Vec<[f64; 3]> {
+        let mut cur = base.to_vec();
+        for l in 0..=level {
+            if l > 0 {
+                let flat = self.tables[l - 1].apply(cur.as_flattened(), 3);
+                cur = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            }
+            if l < level || own_edits {
+                for e in &self.position_edits[l] {
+                    e.apply(&mut cur);
+                }
+            }
+        }
+        cur
     }
 
     /// Bytes used by the stencil tables.

@@ -33,6 +33,13 @@ pub fn child_of_edge(parent: &Level, e: usize) -> u32 {
     (parent.num_vertices() + parent.num_faces() + e) as u32
 }
 
+/// Index of sub-face `k` of face `f` of `parent` in the child level: the children of a face
+/// are consecutive, one per corner, in corner order (see [`refine`]).
+#[inline]
+pub fn child_face(parent: &Level, f: usize, k: usize) -> usize {
+    parent.topo.face_offsets[f] as usize + k
+}
+
 /// Child sharpness of every edge at vertex `v`, in ring order.
 fn child_sharpness_at(parent: &Level, method: CreaseMethod, v: usize, out: &mut Vec<f32>) {
     let mut inc = Vec::new();

@@ -15,7 +15,20 @@ use crate::patch::stam;
 use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
 use crate::refine::step;
-use crate::refine::Level;
+use crate::refine::{edit, Level};
+
+/// The faces of `level` that share a vertex with a face an edit's path has reached
+/// (`tracks`: edit, face, rotation): they are refined further, so that every patch whose
+/// control points an edited element could reach is built below the edit.
+fn near_edits(level: &Level, tracks: &[(usize, u32, u32)]) -> std::collections::HashSet<u32> {
+    let mut out = std::collections::HashSet::new();
+    for &(_, f, _) in tracks {
+        for &v in level.topo.face_vertices(f as usize) {
+            out.extend(level.topo.vertex_faces(v as usize).iter().copied());
+        }
+    }
+    out
+}
 
 /// A face waiting for refinement at the current level, and where its subtree goes.
 #[derive(Clone, Copy, Debug)]
@@ -74,6 +87,7 @@ impl PatchTable {
     /// Settles face `g` of `level` (whose vertices are `rows` over the base vertices) into
     /// node `slot`: a hole, a regular patch, an end cap at the maximum level, or a face to
     /// refine further (returned).
+    /// A `forced` face is refined whatever it is (a hierarchical edit acts below it).
     fn settle(
         &mut self,
         level: &Level,
@@ -81,12 +95,18 @@ impl PatchTable {
         g: usize,
         slot: u32,
         depth: usize,
+        forced: bool,
     ) -> Option<(u32, Slot)> {
         if level.face_hole[g] {
             self.nodes[slot as usize] = Node::Empty;
             return None;
         }
-        if let Some((kind, cps)) = classify(level, g, self.options.single_crease) {
+        let found = if forced {
+            None
+        } else {
+            classify(level, g, self.options.single_crease)
+        };
+        if let Some((kind, cps)) = found {
             let first = self.point_stencils.len() as u32;
             for c in &cps {
                 let terms: Vec<(u32, f64)> = c.iter().map(|&(v, w)| (offset + v, w)).collect();
@@ -208,11 +228,28 @@ impl PatchTable {
                 ),
             ));
         }
-        let (base, _) = Level::base(mesh, &options)?;
+        let (mut base, _) = Level::base(mesh, &options)?;
+        edit::apply_tags(&[], &mut base, mesh);
         let method = options.crease_method;
+        // Faces under a hierarchical edit are isolated at least one level below it.
+        let deepest = mesh.edits.iter().map(|e| e.level()).max().unwrap_or(0);
+        if deepest >= MAX_LEVEL {
+            let i = mesh
+                .edits
+                .iter()
+                .position(|e| e.level() == deepest)
+                .unwrap_or(0);
+            return Err(mesh.error_at(
+                ErrorKind::Usage,
+                crate::mesh::Element::Edit(i),
+                format!(
+                    "an edit at level {deepest} is below the deepest isolation level {MAX_LEVEL}"
+                ),
+            ));
+        }
         let opts = PatchOptions {
             single_crease: opts.single_crease && method == CreaseMethod::Uniform,
-            max_level: opts.max_level.max(1),
+            max_level: opts.max_level.max(1).max(deepest + 1),
             surface: opts.surface,
         };
         if matches!(opts.surface, Approximation::Pn | Approximation::Wm)
@@ -238,6 +275,8 @@ impl PatchTable {
             root_offsets: vec![0],
             point_stencils: StencilTable::new(nb),
             chain: Vec::new(),
+            chain_edits: Vec::new(),
+            base_edits: Vec::new(),
             points: Vec::new(),
             end_caps: Vec::new(),
             stam: Vec::new(),
@@ -261,13 +300,26 @@ impl PatchTable {
             table.root_offsets = (0..=base.num_faces() as u32).map(|f| 3 * f).collect();
             return Ok(table);
         }
+        table.base_edits = mesh
+            .edits
+            .iter()
+            .filter(|e| e.level() == 0)
+            .filter_map(|e| edit::position_edit(&base, e.face as usize, 0, &e.kind))
+            .collect();
+        // Edits below level 0, each with the face its path has reached (in the current
+        // level's numbering) and the path's rotation there.
+        let mut tracks: Vec<(usize, u32, u32)> = (0..mesh.edits.len())
+            .filter(|&i| mesh.edits[i].level() > 0)
+            .map(|i| (i, mesh.edits[i].face, 0))
+            .collect();
+        let mut forced = near_edits(&base, &tracks);
         let mut pending: Vec<(u32, Slot)> = Vec::new();
         for f in 0..base.num_faces() {
             let n = base.topo.face_size(f);
             if n == 4 {
                 let slot = table.new_node(f as u32, 0, Frame::UNIT);
                 table.roots.push(slot);
-                if let Some(p) = table.settle(&base, 0, f, slot, 0) {
+                if let Some(p) = table.settle(&base, 0, f, slot, 0, forced.contains(&(f as u32))) {
                     pending.push(p);
                 }
             } else {
@@ -289,8 +341,32 @@ impl PatchTable {
         while !pending.is_empty() {
             let seeds: Vec<u32> = pending.iter().map(|p| p.0).collect();
             let (sub, old, seed_new) = extract_faces(&level, &seeds, 2);
-            let (child, t) = step::refine(&sub, method);
+            let (mut child, t) = step::refine(&sub, method);
+            // Follow each edit's path one level down; apply the edits that act here.
+            let mut edits_here = Vec::new();
+            let seed_of: std::collections::HashMap<u32, usize> = if tracks.is_empty() {
+                Default::default()
+            } else {
+                seeds.iter().enumerate().map(|(s, &f)| (f, s)).collect()
+            };
+            tracks.retain_mut(|(i, f, r)| {
+                let e = &mesh.edits[*i];
+                // The face a path reaches is forced, so it is a seed (unless it is a hole).
+                let Some(&s) = seed_of.get(f) else {
+                    return false;
+                };
+                let (c, rc) = edit::step_path(&sub, seed_new[s] as usize, *r, e.path[depth]);
+                if e.level() > depth + 1 {
+                    (*f, *r) = (c as u32, rc);
+                    return true;
+                }
+                edit::apply_tag(&mut child, c, rc, &e.kind);
+                edits_here.extend(edit::position_edit(&child, c, rc, &e.kind));
+                false
+            });
             table.chain.push((old, t));
+            table.chain_edits.push(edits_here);
+            forced = near_edits(&child, &tracks);
             let child_offset = total;
             total += child.num_vertices() as u32;
             table.stats.refined_vertices += child.num_vertices();
@@ -313,7 +389,8 @@ impl PatchTable {
                 };
                 for (k, &s) in slots.iter().enumerate() {
                     let c = child_face(&sub, g, k);
-                    match table.settle(&child, child_offset, c, s, depth) {
+                    let force = forced.contains(&(c as u32));
+                    match table.settle(&child, child_offset, c, s, depth, force) {
                         Some((c, Slot::Cap(node))) => caps.push((c, node)),
                         Some(p) => next.push(p),
                         None => {}
@@ -357,10 +434,16 @@ impl PatchTable {
             return;
         }
         let mut all: Vec<[f64; 3]> = base.to_vec();
+        for e in &self.base_edits {
+            e.apply(&mut all);
+        }
         let mut start = 0;
-        for (select, t) in &self.chain {
+        for ((select, t), edits) in self.chain.iter().zip(&self.chain_edits) {
             let sub: Vec<[f64; 3]> = select.iter().map(|&i| all[start + i as usize]).collect();
-            let child = t.apply_points(&sub);
+            let mut child = t.apply_points(&sub);
+            for e in edits {
+                e.apply(&mut child);
+            }
             start = all.len();
             all.extend_from_slice(&child);
         }

@@ -161,6 +161,10 @@ pub struct PatchTable {
     /// Refinement chain: for each level, the vertices of the previous level's cut-out (indices
     /// into that level's vertices) and the table that refines them.
     chain: Vec<(Vec<u32>, StencilTable)>,
+    /// Hierarchical position edits on each refined cut-out of `chain` (its vertex numbering).
+    chain_edits: Vec<Vec<crate::refine::edit::PositionEdit>>,
+    /// Hierarchical position edits on the control vertices.
+    base_edits: Vec<crate::refine::edit::PositionEdit>,
     /// Control point positions (from the last [`Self::set_positions`]).
     pub points: Vec<[f64; 3]>,
     end_caps: Vec<CapMesh>,
