@@ -7,6 +7,8 @@
 //! - `meshes/blob.obj`: a lobed geodesic blob (many valence-3, -5 and -6 vertices);
 //! - `meshes/gear12.obj`, `meshes/gear8.obj`: spur gears with many semi-sharp creases;
 //! - `meshes/cyclorama.obj`: a floor sweeping up into a back wall;
+//! - `meshes/edited_box.obj`: the sharpness-2 box with hierarchical edits (`t vertexedit`,
+//!   `t edgeedit`) for the detail scene;
 //! - `meshes/gear8_tri.obj`, `meshes/rounded_box_s2_tri.obj`: the 8-tooth gear and the
 //!   sharpness-2 box cut into triangles (creases kept), for the Loop scene;
 //! - `studio.exr`: a 256×128 lat-long studio environment (dim gradient, two soft boxes).
@@ -106,6 +108,13 @@ fn main() {
         "rounded_box_s2_tri.obj",
         &shapes::triangulated(&shapes::rounded_box(2.0)),
         "Rounded box, sharpness 2, triangulated (for the Loop scheme).",
+    );
+    write(
+        &meshes,
+        "edited_box.obj",
+        &shapes::edited_box(),
+        "Rounded box, sharpness 2, with hierarchical edits: a plateau with a sharp rim and a \
+         dimple at levels 2-3, a bump with a sharp corner at levels 1-2.",
     );
     write(
         &meshes,

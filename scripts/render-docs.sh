@@ -8,7 +8,7 @@ set -eu
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
 mkdir -p docs target/docs
-for scene in default organic hardsurface loop; do
+for scene in default organic hardsurface loop detail; do
     if [ $# -ge 1 ]; then spp="--spp $1"; else spp=""; fi
     # shellcheck disable=SC2086
     ./target/release/limitray render "scenes/$scene.toml" \

@@ -1,10 +1,11 @@
 //! limitray: ray tracing of exact Catmull-Clark limit surfaces with RenderMan semi-sharp creases.
 //!
 //! The pipeline runs one way, one stage per module:
-//! [`mesh`] (control mesh, tags, validated topology) → [`refine`] (subdivision rules, stencil
-//! tables, limit masks) → [`patch`] (feature-adaptive patch table, exact evaluation) →
-//! [`dice`] (crack-free limit-surface triangles) → [`bvh`] (watertight ray queries) → `render`
-//! (path tracer, feature `render`) / `gpu` (wgpu compute, feature `gpu`) → `io` (EXR, PNG).
+//! [`mesh`] (control mesh, tags, hierarchical edits, validated topology) → [`refine`]
+//! (subdivision rules, stencil tables, limit masks) → [`patch`] (feature-adaptive patch table,
+//! exact evaluation) → [`dice`] (crack-free limit-surface triangles, displaced on request by
+//! [`texture`]'s noise) → [`bvh`] (watertight ray queries) → `render` (path tracer, feature
+//! `render`) / `gpu` (wgpu compute, feature `gpu`) → `io` (EXR, PNG).
 //! [`harness`] holds the test and benchmark ray sets and probes; `cli` is the command-line tool
 //! (feature `cli`).
 //!
@@ -41,6 +42,7 @@ pub mod refine;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod surface;
+pub mod texture;
 pub mod threads;
 pub mod vec3;
 

@@ -22,7 +22,7 @@
 //! assert!((s.p[2] + 68.0 / 81.0).abs() < 1e-12 && s.p[0].abs() < 1e-12 && s.p[1].abs() < 1e-12);
 //!
 //! // Dice it into crack-free triangles and trace a ray from the centre: it always hits.
-//! let traced = surface.bvh(&DiceOptions { rate: DiceRate::Uniform(8), max_rate: 256 })?;
+//! let traced = surface.bvh(&DiceOptions { rate: DiceRate::Uniform(8), ..DiceOptions::default() })?;
 //! let hit = traced.intersect(&Ray::new([0.0; 3], [0.3, 0.2, 1.0])).expect("closed surface");
 //!
 //! // The reference intersector: the certified first hit on the exact limit surface, in f64,

@@ -38,6 +38,7 @@ fn hits_lie_within_the_dicing_error_bound() {
                 &DiceOptions {
                     rate: DiceRate::Uniform(rate),
                     max_rate: 256,
+                    displace: None,
                 },
             )
             .unwrap();

@@ -54,6 +54,7 @@ fn ngons_of_257_and_1000_sides_dice_and_trace_correctly() {
             &DiceOptions {
                 rate: DiceRate::Uniform(8),
                 max_rate: 64,
+                displace: None,
             },
         )
         .unwrap();

@@ -817,3 +817,98 @@ fn refine_honours_hierarchical_edits_like_hbr() {
         assert_eq!(moved, if steps == 4 { 0 } else { 4 }, "level {steps}");
     }
 }
+
+/// `--displace noise:A:F` on dice and trace: the displaced vertices leave the limit surface by
+/// at most 1.1 A, a ray down the cube's axis hits the displaced surface (not the limit's),
+/// `--exact` refuses it, and a bad spec or an image map is exit code 2 naming the spec.
+#[test]
+fn displace_on_dice_and_trace() {
+    let dir = TempDir::new("displace");
+    let mesh = dir.file("cube.obj", CUBE);
+    let plain = refine_points(&refine_to_file_cmd(
+        &dir,
+        "dice",
+        &mesh,
+        "a.obj",
+        &["--rate", "6"],
+    ));
+    let moved = refine_points(&refine_to_file_cmd(
+        &dir,
+        "dice",
+        &mesh,
+        "b.obj",
+        &["--rate", "6", "--displace", "noise:0.2:2"],
+    ));
+    assert_eq!(plain.len(), moved.len());
+    let d = plain
+        .iter()
+        .zip(&moved)
+        .map(|(a, b)| common::dist(a, b))
+        .fold(0.0f64, f64::max);
+    assert!(d > 0.05 && d <= 0.22 + 1e-6, "largest displacement {d}");
+    let ray = b"0.1 0.2 5 0 0 -1\n";
+    let hit = |extra: &[&str]| -> f64 {
+        let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        let o = common::run_limitray(&args, Some(ray));
+        assert_success(&o, "trace");
+        stdout(&o)
+            .split_whitespace()
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let (t0, t1) = (
+        hit(&["--rate", "16"]),
+        hit(&["--rate", "16", "--displace", "noise:0.2:2"]),
+    );
+    assert!(
+        (t0 - t1).abs() > 1e-3 && (t0 - t1).abs() <= 0.22,
+        "{t0} {t1}"
+    );
+    for (extra, msg) in [
+        (vec!["--exact", "--displace", "noise:0.2:2"], "--displace"),
+        (vec!["--displace", "noise:0.2"], "noise:AMPLITUDE:FREQUENCY"),
+        (vec!["--displace", "map:tex.png:1"], "not supported yet"),
+        (vec!["--displace", "noise:0.1:-3"], "frequency"),
+    ] {
+        let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        let o = common::run_limitray(&args, Some(ray));
+        let err = assert_exit_2(&o, &format!("{extra:?}"));
+        assert!(err.contains(msg), "{extra:?}: {err}");
+    }
+}
+
+fn refine_to_file_cmd(
+    dir: &TempDir,
+    cmd: &str,
+    mesh: &Path,
+    out_name: &str,
+    extra: &[&str],
+) -> String {
+    let out = dir.path(out_name);
+    let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&cmd, &mesh];
+    for a in extra {
+        args.push(a);
+    }
+    args.push(&"-o");
+    args.push(&out);
+    let o = limitray(&args);
+    assert_success(&o, &format!("{cmd} {extra:?}"));
+    std::fs::read_to_string(&out).expect("output file written")
+}
+
+fn refine_points(text: &str) -> Vec<[f64; 3]> {
+    text.lines()
+        .filter(|l| l.starts_with("v "))
+        .map(|l| {
+            let x: Vec<f64> = l[2..]
+                .split_whitespace()
+                .map(|t| t.parse().unwrap())
+                .collect();
+            [x[0], x[1], x[2]]
+        })
+        .collect()
+}

@@ -17,6 +17,7 @@ fn diced(mesh: &ControlMesh, rate: DiceRate) -> (PatchTable, DicedMesh) {
         &DiceOptions {
             rate,
             max_rate: 256,
+            displace: None,
         },
     )
     .unwrap();
@@ -138,7 +139,11 @@ fn bad_rates_are_errors() {
         DiceRate::EdgeLength(0.0),
         DiceRate::EdgeLength(f64::NAN),
     ] {
-        let opts = DiceOptions { rate, max_rate: 64 };
+        let opts = DiceOptions {
+            rate,
+            max_rate: 64,
+            displace: None,
+        };
         assert!(dice(&table, &mesh, &opts).is_err(), "{rate:?}");
     }
 }

@@ -128,6 +128,7 @@ fn check(name: &str, mesh: &ControlMesh, n: usize, seed: u64) -> Stats {
         &DiceOptions {
             rate: DiceRate::Uniform(16),
             max_rate: 256,
+            displace: None,
         },
     )
     .unwrap();

@@ -224,7 +224,7 @@ proptest! {
         let Ok(table) = PatchTable::new(&mesh, PatchOptions::default()) else {
             return Ok(());
         };
-        let Ok(d) = dice(&table, &mesh, &DiceOptions { rate: DiceRate::Uniform(3), max_rate: 8 }) else {
+        let Ok(d) = dice(&table, &mesh, &DiceOptions { rate: DiceRate::Uniform(3), max_rate: 8, displace: None }) else {
             return Ok(());
         };
         prop_assert!(d.positions.iter().flatten().all(|c| c.is_finite()));
@@ -360,7 +360,7 @@ proptest! {
         if let Ok(s) = table.eval(limitray::FaceCoord::new(0, 0, 0.3, 0.6)) {
             prop_assert!(s.p.iter().all(|c| c.is_finite()));
         }
-        if let Ok(d) = dice(&table, &mesh, &DiceOptions { rate: DiceRate::Uniform(4), max_rate: 8 }) {
+        if let Ok(d) = dice(&table, &mesh, &DiceOptions { rate: DiceRate::Uniform(4), max_rate: 8, displace: None }) {
             prop_assert!(d.positions.iter().flatten().all(|c| c.is_finite()));
         }
     }

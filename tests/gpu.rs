@@ -45,6 +45,7 @@ fn build_with(mesh: &ControlMesh, rate: DiceRate) -> Built {
         &DiceOptions {
             rate,
             max_rate: 256,
+            displace: None,
         },
     )
     .unwrap();

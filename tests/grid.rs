@@ -131,7 +131,16 @@ fn check_record(name: &str, i: usize, d: &DicedMesh, a: &Hit, b: &Hit) {
 
 fn diced(mesh: &ControlMesh, rate: DiceRate) -> DicedMesh {
     let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
-    dice(&table, mesh, &DiceOptions { rate, max_rate: 64 }).unwrap()
+    dice(
+        &table,
+        mesh,
+        &DiceOptions {
+            rate,
+            max_rate: 64,
+            displace: None,
+        },
+    )
+    .unwrap()
 }
 
 fn rays_for(d: &DicedMesh, n: usize, seed: u64) -> Vec<Ray> {

@@ -57,6 +57,7 @@ fn every_stage_is_safe_at_the_edge_of_the_numeric_contract() {
         &DiceOptions {
             rate: DiceRate::Uniform(8),
             max_rate: 64,
+            displace: None,
         },
     )
     .unwrap();
@@ -176,6 +177,7 @@ fn huge_refinement_dicing_and_films_are_refused_before_allocating() {
     let opts = DiceOptions {
         rate: DiceRate::Uniform(100_000),
         max_rate: 100_000,
+        displace: None,
     };
     let e = dice(&table, &cube, &opts).unwrap_err();
     assert!(e.message.starts_with("dicing would need about"), "{e}");

@@ -20,6 +20,7 @@ fn cube_bvh() -> Arc<GridMesh> {
         &DiceOptions {
             rate: DiceRate::Uniform(8),
             max_rate: 64,
+            displace: None,
         },
     )
     .unwrap();

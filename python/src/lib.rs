@@ -7,7 +7,7 @@
 
 use limitray::bvh::Ray64;
 use limitray::grid::GridMesh;
-use limitray::dice::{dice, DiceOptions, DiceRate};
+use limitray::dice::{dice, DiceOptions, DiceRate, Displacement};
 use limitray::error::{Error, ErrorKind};
 use limitray::mesh::obj::read_obj;
 use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options, Scheme};
@@ -54,6 +54,8 @@ struct Surface {
     warnings: Vec<String>,
     /// BVHs of the diced surface, by uniform rate.
     bvhs: Mutex<HashMap<u32, Arc<GridMesh>>>,
+    /// Displacement of the diced surface along its limit normal.
+    displace: Option<Displacement>,
 }
 
 fn options_for(
@@ -112,17 +114,20 @@ impl Surface {
         if let Some(b) = cache.get(&rate) {
             return Ok(b.clone());
         }
-        let d = dice(&self.table, &self.mesh, &dice_options(rate))?;
+        let d = dice(&self.table, &self.mesh, &self.dice_options(rate))?;
         let b = Arc::new(GridMesh::build(&d)?);
         cache.insert(rate, b.clone());
         Ok(b)
     }
 }
 
-fn dice_options(rate: u32) -> DiceOptions {
-    DiceOptions {
-        rate: DiceRate::Uniform(rate),
-        max_rate: MAX_RATE,
+impl Surface {
+    fn dice_options(&self, rate: u32) -> DiceOptions {
+        DiceOptions {
+            rate: DiceRate::Uniform(rate),
+            max_rate: MAX_RATE,
+            displace: self.displace,
+        }
     }
 }
 
@@ -137,7 +142,7 @@ fn check_rate(rate: u32) -> PyResult<()> {
 impl Surface {
     /// Reads an OBJ file (with OpenSubdiv tags) and builds the patch table.
     #[new]
-    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false, surface="exact"))]
+    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false, surface="exact", displace=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -148,7 +153,9 @@ impl Surface {
         max_level: usize,
         smooth_triangles: bool,
         surface: &str,
+        displace: Option<&str>,
     ) -> PyResult<Surface> {
+        let displace = displace.map(Displacement::parse).transpose().map_err(py_err)?;
         let scheme = match scheme {
             "catmark" => Scheme::Catmark,
             "loop" => Scheme::Loop,
@@ -182,6 +189,7 @@ impl Surface {
                 exact: OnceLock::new(),
                 max_level,
                 bvhs: Mutex::new(HashMap::new()),
+                displace,
             })
         })
     }
@@ -276,6 +284,12 @@ impl Surface {
         exact: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         check_rate(rate)?;
+        if exact && self.displace.is_some() {
+            return Err(usage(
+                "exact=True traces the exact limit surface, which displace leaves: drop one"
+                    .to_string(),
+            ));
+        }
         let shape = origins.shape().to_vec();
         if shape.len() != 2 || shape[1] != 3 || directions.shape() != shape.as_slice() {
             return Err(usage(format!(
@@ -423,7 +437,7 @@ impl Surface {
     )> {
         check_rate(rate)?;
         let d = py
-            .detach(|| dice(&self.table, &self.mesh, &dice_options(rate)))
+            .detach(|| dice(&self.table, &self.mesh, &self.dice_options(rate)))
             .map_err(py_err)?;
         let nv = d.positions.len();
         let nt = d.triangles.len();

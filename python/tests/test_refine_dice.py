@@ -95,3 +95,30 @@ def test_dice_of_a_closed_mesh_is_closed(meshes):
     edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
     _, counts = np.unique(edges, axis=0, return_counts=True)
     assert np.all(counts == 2)
+
+
+def test_displaced_dice_is_the_cli_obj_and_closed(cli, meshes):
+    # displace= is --displace: the same f32 vertices and normals as `limitray dice`, moved off
+    # the limit surface, and still closed (shared edge vertices are displaced once).
+    s = limitray.Surface(meshes["creased_cube"], displace="noise:0.1:3")
+    pos, tri, params = s.dice(6)
+    proc = cli(["dice", meshes["creased_cube"], "--rate", 6, "--displace", "noise:0.1:3",
+                "-o", "-"])
+    assert proc.returncode == 0, proc.stderr
+    v, vn, _, f = parse_obj(proc.stdout)
+    assert np.array_equal(pos, np.array(v, dtype=np.float32))
+    assert np.array_equal(params["n"], np.array(vn, dtype=np.float32))
+    assert np.array_equal(tri, np.array(f))
+    p = limitray.Surface(meshes["creased_cube"]).eval(params["face"], params["u"],
+                                                       params["v"], k=params["k"])["p"]
+    moved = np.linalg.norm(pos - p.astype(np.float32), axis=1)
+    assert moved.max() > 0.05 and moved.max() < 0.1 * 1.1 + 1e-6
+    _, ids = np.unique(pos.view(np.uint32), axis=0, return_inverse=True)
+    t = ids.reshape(-1)[tri]
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert np.all(counts == 2)
+    with pytest.raises(ValueError, match="displace"):
+        s.trace(np.array([[0.0, 0.0, 5.0]]), np.array([[0.0, 0.0, -1.0]]), exact=True)
+    with pytest.raises(ValueError, match="noise:AMPLITUDE:FREQUENCY"):
+        limitray.Surface(meshes["creased_cube"], displace="bump:1")

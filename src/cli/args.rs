@@ -170,6 +170,17 @@ pub struct DiceArgs {
     /// (gregory on a Catmull-Clark mesh: paper 004's Gregory patches).
     #[arg(long, value_enum, default_value_t = SurfaceArg::Exact)]
     pub surface: SurfaceArg,
+    /// Displace the surface along its limit normal: `noise:AMPLITUDE:FREQUENCY` (gradient
+    /// noise of the limit point; crack-free: shared edge vertices are displaced once).
+    #[arg(long, value_parser = parse_displacement)]
+    pub displace: Option<crate::dice::Displacement>,
+}
+
+/// `--displace SPEC` ([`crate::dice::Displacement::parse`]).
+pub(crate) fn parse_displacement(
+    spec: &str,
+) -> std::result::Result<crate::dice::Displacement, String> {
+    crate::dice::Displacement::parse(spec).map_err(|e| e.to_string())
 }
 
 impl Default for DiceArgs {
@@ -180,6 +191,7 @@ impl Default for DiceArgs {
             max_rate: 256,
             max_level: crate::patch::table::DEFAULT_MAX_LEVEL,
             surface: SurfaceArg::Exact,
+            displace: None,
         }
     }
 }
@@ -202,6 +214,7 @@ impl DiceArgs {
                 None => DiceRate::Uniform(self.rate),
             },
             max_rate: self.max_rate,
+            displace: self.displace,
         }
     }
 }

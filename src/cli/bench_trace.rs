@@ -84,6 +84,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             &DiceOptions {
                 rate: DiceRate::Uniform(args.rate),
                 max_rate: 1024,
+                displace: None,
             },
         )?;
         let t2 = std::time::Instant::now();
@@ -164,6 +165,7 @@ fn exact_bench(
         &DiceOptions {
             rate: DiceRate::Uniform(1),
             max_rate: 1024,
+            displace: None,
         },
     )?;
     let mut bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];

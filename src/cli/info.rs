@@ -117,6 +117,7 @@ pub fn summary(name: &str, mesh: &ControlMesh, level: &Level, options: &Options)
         "nonmanifold_edges": nonmanifold_edges,
         "creases": mesh.creases.len(),
         "corners": mesh.corners.len(),
+        "hierarchical_edits": mesh.edits.len(),
         "holes": level.face_hole.iter().filter(|&&h| h).count(),
         "boundary_interpolation": format!("{:?}", options.boundary),
         "crease_method": format!("{:?}", options.crease_method),

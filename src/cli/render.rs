@@ -62,6 +62,10 @@ pub struct RenderArgs {
     /// Gregory patches) apply to Catmull-Clark meshes too.
     #[arg(long, value_enum)]
     pub surface: Option<super::args::SurfaceArg>,
+    /// Displace every mesh of the scene along its limit normal (overrides their `displace`
+    /// key): `noise:AMPLITUDE:FREQUENCY`, in each mesh's object space.
+    #[arg(long, value_parser = super::args::parse_displacement)]
+    pub displace: Option<crate::dice::Displacement>,
 }
 
 fn parse_res(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -144,6 +148,11 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
             .filter(|m| catmark_too || m.scheme == crate::mesh::Scheme::Loop)
         {
             m.surface = s;
+        }
+    }
+    if let Some(d) = args.displace {
+        for m in &mut desc.meshes {
+            m.displace = Some(d);
         }
     }
     let mut settings = desc.render;

@@ -64,6 +64,12 @@ pub fn run(args: &TraceCmd) -> Result<()> {
                 "--exact runs the reference intersector on the CPU; drop --backend gpu",
             ));
         }
+        if args.dice.displace.is_some() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "--exact traces the exact limit surface, which --displace leaves: drop one",
+            ));
+        }
         let table =
             PatchTable::with_options(&m, args.rules.options(&m), args.dice.patch_options())?;
         let tracer = ExactTracer::new(std::sync::Arc::new(table), &m)?;

@@ -90,6 +90,7 @@ mod tests {
                 let opts = DiceOptions {
                     rate: DiceRate::Uniform(r),
                     max_rate: 256,
+                    displace: None,
                 };
                 let est = estimate(&level, &edge_rates(&table, &level, &opts).unwrap());
                 let d = dice(&table, &mesh, &opts).unwrap();

@@ -17,10 +17,12 @@
 //! (sharp creases, corners, non-manifold edges), where the two sides have different normals,
 //! does a side vertex get a copy per domain: the copy's position is the same `f32` bits.
 
+pub mod displace;
 pub mod estimate;
 mod pattern;
 mod rates;
 
+pub use displace::Displacement;
 pub use estimate::DiceEstimate;
 pub use pattern::{pattern, side_uv, GridPart, Pattern};
 pub use rates::{edge_rates, DiceRate, Rates, ScreenRate};
@@ -42,6 +44,8 @@ pub struct DiceOptions {
     pub rate: DiceRate,
     /// Upper bound on the segments of one edge.
     pub max_rate: u32,
+    /// Displacement along the limit normal applied to every diced vertex ([`displace`]).
+    pub displace: Option<Displacement>,
 }
 
 impl Default for DiceOptions {
@@ -49,6 +53,7 @@ impl Default for DiceOptions {
         DiceOptions {
             rate: DiceRate::Uniform(4),
             max_rate: 256,
+            displace: None,
         }
     }
 }
@@ -133,7 +138,14 @@ struct Point {
 /// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
 /// vanishes (corners of boundary faces, crease ends), the normal is taken a little inside the
 /// domain.
-fn eval_point(table: &PatchTable, face: u32, k: u32, u: f64, v: f64) -> Result<Point> {
+fn eval_point(
+    table: &PatchTable,
+    displace: Option<&Displacement>,
+    face: u32,
+    k: u32,
+    u: f64,
+    v: f64,
+) -> Result<Point> {
     let s = table.eval(FaceCoord::new(face, k, u, v))?;
     let mut n = cross(s.du, s.dv);
     let scale = norm(s.du) * norm(s.dv);
@@ -148,8 +160,22 @@ fn eval_point(table: &PatchTable, face: u32, k: u32, u: f64, v: f64) -> Result<P
     } else {
         [0.0, 0.0, 1.0]
     };
+    let (p, n) = match displace {
+        Some(d) => d.apply(&s, n),
+        None => (s.p, n),
+    };
+    if !crate::numeric::in_range(p) {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!(
+                "face {face}: the displaced point {p:?} at ({k}, {u}, {v}) is outside the numeric \
+                 range ±{:e}",
+                crate::numeric::MAX_COORD
+            ),
+        ));
+    }
     Ok(Point {
-        p: s.p.map(|x| x as f32),
+        p: p.map(|x| x as f32),
         n: n.map(|x| x as f32),
         param: FaceCoord::new(face, k, u, v),
     })
@@ -283,7 +309,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     }
     let points: Vec<Point> = jobs
         .par_iter()
-        .map(|&(f, k, u, v)| eval_point(table, f, k, u, v))
+        .map(|&(f, k, u, v)| eval_point(table, opts.displace.as_ref(), f, k, u, v))
         .collect::<Result<_>>()?;
     let shared = Shared {
         points,
@@ -309,6 +335,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
         shared: &shared,
         sharp_edge: &sharp_edge,
         sharp_vertex: &sharp_vertex,
+        displace: opts.displace.as_ref(),
     };
     let parts: Vec<DomainOut> = domains
         .par_chunks(64)
@@ -389,6 +416,7 @@ struct DomainCtx<'a> {
     shared: &'a Shared,
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
+    displace: Option<&'a Displacement>,
 }
 
 /// A point on a domain's side: its shared index, and whether it lies on a seam.
@@ -489,7 +517,7 @@ impl DomainCtx<'_> {
                 if sp.seam && (owner.face as usize != f || owner.k as usize != k) {
                     // A seam vertex owned by another domain: copy its position, own normal.
                     let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
-                    let mut q = eval_point(self.table, f as u32, k as u32, u, v)?;
+                    let mut q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
                     q.p = self.shared.points[sp.index as usize].p;
                     map.push(LOCAL | out.points.len() as u32);
                     out.points.push(q);
@@ -500,8 +528,14 @@ impl DomainCtx<'_> {
         }
         for &[u, v] in &pat.interior {
             map.push(LOCAL | out.points.len() as u32);
-            out.points
-                .push(eval_point(self.table, f as u32, k as u32, u, v)?);
+            out.points.push(eval_point(
+                self.table,
+                self.displace,
+                f as u32,
+                k as u32,
+                u,
+                v,
+            )?);
         }
         // A domain that is one patch has one level (no lookup per triangle).
         let whole = self.table.domain_level(f, k);

@@ -225,7 +225,55 @@ impl<'a, W: Write + ?Sized> ObjWriter<'a, W> {
         for h in &m.holes {
             writeln!(self.w, "t hole 1/0 {h}")?;
         }
+        for e in &m.edits {
+            self.edit(e)?;
+        }
         Ok(())
+    }
+
+    /// One hierarchical edit as a tag of its own (`t vertexedit`, `edgeedit` or `faceedit`;
+    /// see [`super::edit`]).
+    fn edit(&mut self, e: &super::HierarchicalEdit) -> std::io::Result<()> {
+        use super::{EditKind, EditOp};
+        let op = |op: EditOp| match op {
+            EditOp::Set => "set",
+            EditOp::Add => "add",
+            EditOp::Subtract => "subtract",
+        };
+        let mut path: Vec<u32> = vec![e.face];
+        path.extend(&e.path);
+        path.extend(e.element());
+        let (name, floats, strings): (&str, Vec<f64>, String) = match e.kind {
+            EditKind::Position { op: o, value, .. } => {
+                ("vertexedit", value.to_vec(), format!("{} P value", op(o)))
+            }
+            EditKind::VertexSharpness { op: o, value, .. } => (
+                "vertexedit",
+                vec![value as f64],
+                format!("{} P sharpness", op(o)),
+            ),
+            EditKind::EdgeSharpness { op: o, value, .. } => (
+                "edgeedit",
+                vec![value as f64],
+                format!("{} P sharpness", op(o)),
+            ),
+            EditKind::Hole => ("faceedit", Vec::new(), "hole".to_string()),
+        };
+        write!(
+            self.w,
+            "t {name} {}/{}/{} {}",
+            path.len() + 1,
+            floats.len(),
+            strings.split(' ').count(),
+            path.len()
+        )?;
+        for i in &path {
+            write!(self.w, " {i}")?;
+        }
+        for x in &floats {
+            write!(self.w, " {x:?}")?;
+        }
+        writeln!(self.w, " {strings}")
     }
 }
 

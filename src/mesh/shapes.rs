@@ -324,6 +324,60 @@ pub fn cyclorama(width: f64, depth: f64, height: f64) -> ControlMesh {
     m
 }
 
+/// The rounded box (edges at sharpness 2) carrying hierarchical edits (paper 001 §6.3): on
+/// its front face (z = +1) a raised square made at level 2 (its edges set infinitely sharp at
+/// level 2) with a dimple pressed in at level 3, and on a side face a bump at level 1 with a sharp
+/// corner at level 2. Closed: no edit makes a hole.
+pub fn edited_box() -> ControlMesh {
+    use super::{EditKind, EditOp, HierarchicalEdit};
+    let mut m = rounded_box(2.0);
+    let edit = |face: u32, path: &[u32], kind: EditKind| HierarchicalEdit {
+        face,
+        path: path.to_vec(),
+        kind,
+    };
+    let up = |corner: u32, h: f64| EditKind::Position {
+        corner,
+        op: EditOp::Add,
+        value: [0.0, 0.0, h],
+    };
+    // Face 0 is the front (z = +1): its four level-1 quads' inner level-2 children form a
+    // square around the centre; raise their corners and make their edges creases.
+    for k in 0..4u32 {
+        let inner = (k + 2) % 4;
+        for c in 0..4 {
+            m.edits.push(edit(0, &[k, inner], up(c, 0.1)));
+            m.edits.push(edit(
+                0,
+                &[k, inner],
+                EditKind::EdgeSharpness {
+                    edge: c,
+                    op: EditOp::Set,
+                    value: 10.0,
+                },
+            ));
+        }
+    }
+    m.edits.push(edit(0, &[0, 2, 2], up(2, -0.2)));
+    // Face 4 (x = +1): a bump at level 1 and a sharp corner on it at level 2.
+    let out = |corner: u32| EditKind::Position {
+        corner,
+        op: EditOp::Add,
+        value: [0.25, 0.0, 0.0],
+    };
+    m.edits.push(edit(4, &[1], out(2)));
+    m.edits.push(edit(
+        4,
+        &[1, 2],
+        EditKind::VertexSharpness {
+            corner: 0,
+            op: EditOp::Set,
+            value: 10.0,
+        },
+    ));
+    m
+}
+
 /// Writes a control mesh as OBJ with OpenSubdiv tags (`t crease 2/1 a b s`,
 /// `t corner 1/1 v s`, `t hole 1/0 f`), positions in shortest round-trip form, `header`
 /// lines as comments first.
@@ -347,6 +401,7 @@ mod tests {
         assert_eq!(back.positions, m.positions);
         assert_eq!(back.face_verts, m.face_verts);
         assert_eq!(back.creases, m.creases);
+        assert_eq!(back.edits, m.edits);
     }
 
     #[test]
@@ -365,11 +420,12 @@ mod tests {
         assert_eq!(g.num_faces(), 6 * 48);
         round_trip(&g);
         round_trip(&cyclorama(20.0, 10.0, 8.0));
+        round_trip(&edited_box());
     }
 
     #[test]
     fn closed_shapes_are_closed() {
-        for m in [rounded_box(2.0), blob(), gear(8)] {
+        for m in [rounded_box(2.0), blob(), gear(8), edited_box()] {
             let topo = crate::mesh::Topology::new(m.num_vertices(), &m.face_offsets, &m.face_verts)
                 .unwrap();
             assert!((0..topo.num_edges() as u32).all(|e| topo.edge_face_count(e) == 2));

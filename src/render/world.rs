@@ -81,12 +81,12 @@ fn index_of<T: PartialEq>(list: &mut Vec<T>, x: T) -> usize {
 /// (a screen-space rate includes the eye in object space, so only instances with the same
 /// transform share it).
 #[derive(Clone, Copy, PartialEq, Eq)]
-struct DiceKey([u64; 6]);
+struct DiceKey([u64; 8]);
 
 impl DiceKey {
     fn of(o: &DiceOptions) -> DiceKey {
         let m = o.max_rate as u64;
-        DiceKey(match o.rate {
+        let [a, b, c, d, e, f] = match o.rate {
             DiceRate::Uniform(r) => [0, r as u64, m, 0, 0, 0],
             DiceRate::EdgeLength(l) => [1, l.to_bits(), m, 0, 0, 0],
             DiceRate::Screen(s) => [
@@ -97,7 +97,15 @@ impl DiceKey {
                 s.pixels_per_radian.to_bits(),
                 s.pixels_per_edge.to_bits(),
             ],
-        })
+        };
+        let (g, h) = match o.displace {
+            None => (0, 0),
+            Some(crate::dice::Displacement::Noise {
+                amplitude,
+                frequency,
+            }) => (amplitude.to_bits(), frequency.to_bits() | 1 << 63),
+        };
+        DiceKey([a, b, c, d, e, f, g, h])
     }
 }
 
@@ -305,6 +313,7 @@ impl World {
                 DiceOptions {
                     rate,
                     max_rate: m.max_rate,
+                    displace: m.displace,
                 }
             })
             .collect();

@@ -58,14 +58,19 @@ class Surface:
     OpenSubdiv's smooth-triangle rule (as the mesh's ``t smoothtriangles`` tag does);
     ``surface`` replaces a Loop mesh's exact limit surface by paper 002's ``"pn"``, ``"wm"`` or
     ``"gregory"`` approximation, a Catmull-Clark mesh's by paper 004's Gregory patches
-    (``"gregory"``), as ``--surface`` does. The mesh reader's warnings are issued as
-    Python warnings and kept in ``warnings``.
+    (``"gregory"``), as ``--surface`` does. ``displace`` (``"noise:AMPLITUDE:FREQUENCY"``, as
+    ``--displace``) displaces the diced surface of ``dice`` and ``trace`` along its limit
+    normal (``eval`` and ``trace(exact=True)`` stay on the limit surface; the latter refuses a
+    displaced surface). Hierarchical edits in the file are honoured everywhere. The mesh
+    reader's warnings are issued as Python warnings and kept in ``warnings``.
     """
 
     def __init__(self, path, scheme="catmark", chaikin=False, boundary=None,
-                 max_level=DEFAULT_MAX_LEVEL, smooth_triangles=False, surface="exact"):
+                 max_level=DEFAULT_MAX_LEVEL, smooth_triangles=False, surface="exact",
+                 displace=None):
         self._s = _limitray.Surface(str(path), scheme, bool(chaikin), boundary, int(max_level),
-                                    bool(smooth_triangles), str(surface))
+                                    bool(smooth_triangles), str(surface),
+                                    None if displace is None else str(displace))
         self.path = str(path)
         for w in self._s.warnings:
             _warnings.warn(w, stacklevel=2)

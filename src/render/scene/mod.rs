@@ -105,6 +105,9 @@ pub struct MeshDesc {
     /// 002's approximations of a Loop mesh; `"gregory"` on a Catmull-Clark mesh is paper 004's
     /// Gregory patches).
     pub surface: crate::patch::approx::Approximation,
+    /// Displacement along the limit normal (`displace = "noise:AMPLITUDE:FREQUENCY"`, in the
+    /// mesh's object space), applied at dicing.
+    pub displace: Option<crate::dice::Displacement>,
     /// Line of the entry in the scene file, for messages.
     pub line: usize,
 }
@@ -371,6 +374,13 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
                 a
             }
         };
+        let displace = match &r.displace {
+            None => None,
+            Some(s) => Some(
+                crate::dice::Displacement::parse(s.get_ref())
+                    .map_err(|e: Error| src.err(s.span(), e.message))?,
+            ),
+        };
         meshes.push(MeshDesc {
             file: base.join(r.file.get_ref()),
             material,
@@ -380,6 +390,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             max_rate,
             scheme,
             surface,
+            displace,
             line: src.line_of(m.span().start),
         });
     }

@@ -126,6 +126,7 @@ pub(super) struct RawMesh {
     pub(super) max_rate: Option<Spanned<i64>>,
     pub(super) scheme: Option<Spanned<String>>,
     pub(super) surface: Option<Spanned<String>>,
+    pub(super) displace: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]

@@ -1,0 +1,3 @@
+//! Textures: procedural noise ([`noise`]) for tests and displacement.
+
+pub mod noise;
