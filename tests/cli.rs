@@ -124,16 +124,7 @@ fn points_of(text: &str) -> Vec<[f64; 3]> {
 
 /// Runs `refine` on `mesh` with extra arguments, writing to a file, and returns its text.
 fn refine_to_file(dir: &TempDir, mesh: &Path, out_name: &str, extra: &[&str]) -> String {
-    let out = dir.path(out_name);
-    let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"refine", &mesh];
-    for a in extra {
-        args.push(a);
-    }
-    args.push(&"-o");
-    args.push(&out);
-    let o = limitray(&args);
-    assert_success(&o, &format!("refine {extra:?}"));
-    std::fs::read_to_string(&out).expect("output file written")
+    refine_to_file_cmd(dir, "refine", mesh, out_name, extra)
 }
 
 #[test]
@@ -778,21 +769,9 @@ fn refine_honours_hierarchical_edits_like_hbr() {
     };
     let dir = TempDir::new("hedit");
     let mesh = models.join("opensubdiv/catmark_square_hedit0.obj");
-    let points = |text: &str| -> Vec<[f64; 3]> {
-        text.lines()
-            .filter(|l| l.starts_with("v "))
-            .map(|l| {
-                let x: Vec<f64> = l[2..]
-                    .split_whitespace()
-                    .map(|t| t.parse().unwrap())
-                    .collect();
-                [x[0], x[1], x[2]]
-            })
-            .collect()
-    };
     for steps in 2..=4 {
         let level = steps.to_string();
-        let ours = points(&refine_to_file(&dir, &mesh, "r.obj", &["--level", &level]));
+        let ours = refine_points(&refine_to_file(&dir, &mesh, "r.obj", &["--level", &level]));
         let base = models.join(format!(
             "opensubdiv-hbr-baseline/catmark_square_hedit0_level{}.obj",
             steps - 1
@@ -802,7 +781,7 @@ fn refine_honours_hierarchical_edits_like_hbr() {
         let d = common::max_nearest_distance(&ours, &theirs)
             .max(common::max_nearest_distance(&theirs, &ours));
         assert!(d <= 1e-6 * diag, "level {steps}: {d}");
-        let edited = points(&refine_to_file(
+        let edited = refine_points(&refine_to_file(
             &dir,
             &mesh,
             "e.obj",

@@ -256,6 +256,34 @@ fn patches_tile_their_faces_and_know_their_domain() {
     }
 }
 
+/// Largest distance (relative to the diagonal) between `eval` and the exact limit of the
+/// uniform refinement to `level` with every edit applied, at the level's dyadic points, the
+/// points on a hole's closure skipped; also the points compared and skipped.
+fn edited_error(mesh: &ControlMesh, level: usize, name: &str) -> (f64, usize, usize) {
+    let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
+    let r = Refiner::new(mesh, level).unwrap();
+    let pos = r.refine_positions(&mesh.positions, level);
+    let lvl = &r.levels[level];
+    let limit = LimitStencils::new(lvl, mesh.options.crease_method)
+        .position
+        .apply_points(&pos);
+    let diag = mesh.diagonal();
+    let (mut worst, mut n, mut skipped) = (0.0f64, 0, 0);
+    for (v, f, k, u, w) in dyadic_samples(&r, level) {
+        let faces = lvl.topo.vertex_faces(v as usize);
+        if faces.iter().any(|&g| lvl.face_hole[g as usize]) {
+            skipped += 1;
+            continue;
+        }
+        let s = table
+            .eval(FaceCoord::new(f as u32, k as u32, u, w))
+            .unwrap_or_else(|e| panic!("{name}: ({f}, {k}, {u}, {w}): {e}"));
+        worst = worst.max(common::dist(&s.p, &limit[v as usize]) / diag);
+        n += 1;
+    }
+    (worst, n, skipped)
+}
+
 /// Hierarchical edits (catmark_square_hedit0–4: position edits at levels 1–3, vertex and edge
 /// sharpness set at level 1, a hole at level 2) are honoured by evaluation: at every dyadic
 /// point of level 4, below the deepest edit, `eval` equals the exact limit of the uniformly
@@ -272,31 +300,7 @@ fn eval_honours_hierarchical_edits() {
         let name = format!("catmark_square_hedit{i}");
         let mesh = read_obj(&models.join("opensubdiv").join(format!("{name}.obj"))).unwrap();
         assert!(!mesh.edits.is_empty(), "{name}: no edits read");
-        let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
-        let r = Refiner::new(&mesh, level).unwrap();
-        let pos = r.refine_positions(&mesh.positions, level);
-        let lvl = &r.levels[level];
-        let limit = LimitStencils::new(lvl, mesh.options.crease_method)
-            .position
-            .apply_points(&pos);
-        let diag = mesh.diagonal();
-        let (mut worst, mut n, mut skipped) = (0.0f64, 0, 0);
-        for (v, f, k, u, w) in dyadic_samples(&r, level) {
-            let near_hole = lvl
-                .topo
-                .vertex_faces(v as usize)
-                .iter()
-                .any(|&g| lvl.face_hole[g as usize]);
-            if near_hole {
-                skipped += 1;
-                continue;
-            }
-            let s = table
-                .eval(FaceCoord::new(f as u32, k as u32, u, w))
-                .unwrap_or_else(|e| panic!("{name}: ({f}, {k}, {u}, {w}): {e}"));
-            worst = worst.max(common::dist(&s.p, &limit[v as usize]) / diag);
-            n += 1;
-        }
+        let (worst, n, skipped) = edited_error(&mesh, level, &name);
         println!("{name}: {n} points ({skipped} by holes), max error {worst:.2e}");
         assert!(worst <= 1e-6, "{name}: {worst:e}");
     }
@@ -368,24 +372,7 @@ fn eval_honours_random_hierarchical_edits() {
                 mesh.edits.push(HierarchicalEdit { face, path, kind });
             }
             let level = 1 + mesh.edits.iter().map(|e| e.level()).max().unwrap();
-            let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
-            let r = Refiner::new(&mesh, level).unwrap();
-            let pos = r.refine_positions(&mesh.positions, level);
-            let lvl = &r.levels[level];
-            let limit = LimitStencils::new(lvl, mesh.options.crease_method)
-                .position
-                .apply_points(&pos);
-            let mut worst = 0.0f64;
-            for (v, f, k, u, w) in dyadic_samples(&r, level) {
-                let faces = lvl.topo.vertex_faces(v as usize);
-                if faces.iter().any(|&g| lvl.face_hole[g as usize]) {
-                    continue;
-                }
-                let s = table
-                    .eval(FaceCoord::new(f as u32, k as u32, u, w))
-                    .unwrap_or_else(|e| panic!("{name} round {round}: {e}"));
-                worst = worst.max(common::dist(&s.p, &limit[v as usize]) / diag);
-            }
+            let (worst, _, _) = edited_error(&mesh, level, &format!("{name} round {round}"));
             println!("{name} round {round} (level {level}): max error {worst:.2e}");
             assert!(
                 worst <= 1e-6,

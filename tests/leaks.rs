@@ -342,11 +342,7 @@ fn loop_cases(surface: Approximation, per_case: usize) -> Option<(usize, usize)>
 #[test]
 fn hierarchical_edits_do_not_leak() {
     use limitray::mesh::{shapes, EditKind, EditOp, HierarchicalEdit};
-    let edit = |face: u32, path: &[u32], kind: EditKind| HierarchicalEdit {
-        face,
-        path: path.to_vec(),
-        kind,
-    };
+    let edit = HierarchicalEdit::new;
     let bump = |corner: u32, z: f64| EditKind::Position {
         corner,
         op: EditOp::Add,

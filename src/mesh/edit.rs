@@ -76,6 +76,15 @@ pub struct HierarchicalEdit {
 }
 
 impl HierarchicalEdit {
+    /// An edit of `kind` on the sub-face reached from control face `face` by `path`.
+    pub fn new(face: u32, path: &[u32], kind: EditKind) -> Self {
+        HierarchicalEdit {
+            face,
+            path: path.to_vec(),
+            kind,
+        }
+    }
+
     /// The refinement level the edit acts at.
     pub fn level(&self) -> usize {
         self.path.len()

@@ -331,11 +331,7 @@ pub fn cyclorama(width: f64, depth: f64, height: f64) -> ControlMesh {
 pub fn edited_box() -> ControlMesh {
     use super::{EditKind, EditOp, HierarchicalEdit};
     let mut m = rounded_box(2.0);
-    let edit = |face: u32, path: &[u32], kind: EditKind| HierarchicalEdit {
-        face,
-        path: path.to_vec(),
-        kind,
-    };
+    let edit = HierarchicalEdit::new;
     let up = |corner: u32, h: f64| EditKind::Position {
         corner,
         op: EditOp::Add,
