@@ -13,7 +13,8 @@
 //   t creasemethod 0/0/1 chaikin|uniform|normal
 //   t smoothtriangles 0/0/1 smooth|catmark       Sdc TRI_SUB_SMOOTH or TRI_SUB_CATMARK
 // Other tags (vertexedit, facevaryinginterpolateboundary, ...) are ignored with a warning;
-// vt, vn, g, o, s, usemtl, mtllib, ... are ignored. Errors: `PROGRAM: FILE:LINE: message` on
+// `vt u [v]` and the texture indices of `f a/b[/c]` form one face-varying channel when every
+// face corner has one; vn, g, o, s, usemtl, mtllib, ... are ignored. Errors: `PROGRAM: FILE:LINE: message` on
 // stderr, exit 1.
 #pragma once
 
@@ -66,6 +67,12 @@ struct MeshT {
     Sdc::Options::CreasingMethod creaseMethod = Sdc::Options::CREASE_UNIFORM;
     Sdc::Options::TriangleSubdivision triangles = Sdc::Options::TRI_SUB_CATMARK;
     Sdc::SchemeType scheme = Sdc::SCHEME_CATMARK;  // SCHEME_LOOP with the programs' --loop
+    // Face-varying texture coordinates (`vt`, and the `b` of `f a/b`): one channel when every
+    // face corner has one, refined with `fvarMode` (the oracle's --fvar).
+    std::vector<Real> uvs;     // 2 per `vt`
+    std::vector<int> faceUVs;  // per face corner, 0-based; empty without a channel
+    bool anyCornerWithoutUV = false;
+    Sdc::Options::FVarLinearInterpolation fvarMode = Sdc::Options::FVAR_LINEAR_CORNERS_ONLY;
 };
 
 [[noreturn]] inline void fail(std::string const &msg) {
@@ -112,6 +119,22 @@ inline int parseFaceCorner(std::string const &tok, int numVerts) {
                                  std::to_string(numVerts) + " vertices so far)");
     }
     return int(v);
+}
+
+// The texture index of a face corner "a/b" or "a/b/c" (0-based), or -1 without one.
+inline int parseFaceUV(std::string const &tok, int numUVs) {
+    size_t first = tok.find('/');
+    if (first == std::string::npos) return -1;
+    size_t second = tok.find('/', first + 1);
+    std::string mid = tok.substr(first + 1, second == std::string::npos ? std::string::npos : second - first - 1);
+    if (mid.empty()) return -1;
+    long idx = parseInt(mid, "face texture index");
+    long t = idx > 0 ? idx - 1 : numUVs + idx;
+    if (idx == 0 || t < 0 || t >= numUVs) {
+        throw std::runtime_error("face texture index " + mid + " out of range (" + std::to_string(numUVs) +
+                                 " texture coordinates so far)");
+    }
+    return int(t);
 }
 
 template <class Real>
@@ -217,10 +240,20 @@ MeshT<Real> readObj(std::string const &path) {
                 if (tok.size() < 4) throw std::runtime_error("vertex needs 3 coordinates");
                 mesh.positions.push_back({parseReal<Real>(tok[1], "coordinate"), parseReal<Real>(tok[2], "coordinate"),
                                           parseReal<Real>(tok[3], "coordinate")});
+            } else if (tok[0] == "vt") {
+                if (tok.size() < 2) throw std::runtime_error("texture coordinate needs a value");
+                mesh.uvs.push_back(parseReal<Real>(tok[1], "texture coordinate"));
+                mesh.uvs.push_back(tok.size() > 2 ? parseReal<Real>(tok[2], "texture coordinate") : Real(0));
             } else if (tok[0] == "f") {
                 if (tok.size() < 4) throw std::runtime_error("face needs at least 3 vertices");
                 int n = int(mesh.positions.size());
-                for (size_t k = 1; k < tok.size(); ++k) mesh.faceVerts.push_back(parseFaceCorner(tok[k], n));
+                int nt = int(mesh.uvs.size() / 2);
+                for (size_t k = 1; k < tok.size(); ++k) {
+                    mesh.faceVerts.push_back(parseFaceCorner(tok[k], n));
+                    int t = parseFaceUV(tok[k], nt);
+                    if (t < 0) mesh.anyCornerWithoutUV = true;
+                    mesh.faceUVs.push_back(t);
+                }
                 mesh.faceSizes.push_back(int(tok.size() - 1));
             } else if (tok[0] == "t") {
                 parseTag(mesh, tok, path, lineNo);
@@ -230,6 +263,8 @@ MeshT<Real> readObj(std::string const &path) {
         }
     }
     if (mesh.faceSizes.empty()) fail(path + ": no faces");
+    // Like limitray's reader: texture indices only when every face corner has one.
+    if (mesh.anyCornerWithoutUV) mesh.faceUVs.clear();
     int nv = int(mesh.positions.size()), nf = int(mesh.faceSizes.size());
     for (int v : mesh.creasePairs)
         if (v < 0 || v >= nv) fail(path + ": crease vertex " + std::to_string(v) + " out of range");
@@ -269,12 +304,20 @@ Far::TopologyRefiner *createRefiner(MeshT<Real> const &mesh) {
     desc.cornerWeights = mesh.cornerSharpness.data();
     desc.numHoles = int(mesh.holes.size());
     desc.holeIndices = mesh.holes.data();
+    Far::TopologyDescriptor::FVarChannel channel;
+    if (!mesh.faceUVs.empty()) {
+        channel.numValues = int(mesh.uvs.size() / 2);
+        channel.valueIndices = mesh.faceUVs.data();
+        desc.numFVarChannels = 1;
+        desc.fvarChannels = &channel;
+    }
 
     // Sdc::Options() defaults to VTX_BOUNDARY_NONE: always set the boundary rule explicitly.
     Sdc::Options sdc;
     sdc.SetVtxBoundaryInterpolation(mesh.boundary);
     sdc.SetCreasingMethod(mesh.creaseMethod);
     sdc.SetTriangleSubdivision(mesh.triangles);
+    sdc.SetFVarLinearInterpolation(mesh.fvarMode);
 
     using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
     Far::TopologyRefiner *refiner = Factory::Create(desc, Factory::Options(mesh.scheme, sdc));

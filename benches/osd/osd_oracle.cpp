@@ -6,10 +6,18 @@
 //
 // Usage:
 //   osd_oracle MESH.obj [--refine N] [--eval] [--endcap gregory|bspline|legacy] [--isolation L]
-//              [--loop]
+//              [--loop] [--fvar MODE]
 //
 // --loop       Loop subdivision (Sdc::SCHEME_LOOP; every face must be a triangle) instead of
 //              Catmull-Clark. Samples are then "face 0 u v" in Far's triangle parameterisation.
+//
+// --fvar MODE  face-varying linear interpolation of the `vt` channel (Sdc FVAR_LINEAR_*): none,
+//              corners-only (default), corners-plus1, corners-plus2, boundaries, all. With
+//              --refine, each level is followed by
+//                fvar NVAL
+//                NVAL lines "u v"                  face-varying values, Far's order
+//                NF lines "n j0 .. j(n-1)"         each face's value indices
+//              when the mesh has a channel (every face corner with a texture index).
 //
 // --refine N   uniform refinement (TopologyRefiner::RefineUniform, PrimvarRefinerReal<double>)
 //              to levels 1..N; for each level prints
@@ -84,6 +92,16 @@ using osdmesh::onFarError;
 using osdmesh::onFarWarning;
 using osdmesh::parseInt;
 
+// A face-varying texture coordinate for Far's templated interpolation.
+struct UV {
+    double u, v;
+    void Clear(void * = nullptr) { u = v = 0; }
+    void AddWithWeight(UV const &src, double w) {
+        u += w * src.u;
+        v += w * src.v;
+    }
+};
+
 // Positions of every level of `r` (level 0 = control points), concatenated.
 std::vector<Point3> interpolateAll(Far::TopologyRefiner const &r, std::vector<Point3> const &base, size_t extra) {
     std::vector<Point3> all(size_t(r.GetNumVerticesTotal()) + extra, Point3{0, 0, 0});
@@ -105,6 +123,21 @@ void refineUniform(Mesh const &m, int levels) {
     r->RefineUniform(uopts);
     if (gFarError || r->GetMaxLevel() != levels) fail("RefineUniform failed");
     std::vector<Point3> all = interpolateAll(*r, m.positions, 0);
+    // Face-varying values of every level (PrimvarRefiner::InterpolateFaceVarying).
+    std::vector<std::vector<UV>> uvLevels;
+    if (r->GetNumFVarChannels() > 0) {
+        std::vector<UV> base(m.uvs.size() / 2);
+        for (size_t i = 0; i < base.size(); ++i) base[i] = UV{m.uvs[2 * i], m.uvs[2 * i + 1]};
+        uvLevels.push_back(base);
+        Far::PrimvarRefinerReal<double> primvar(*r);
+        for (int l = 1; l <= levels; ++l) {
+            std::vector<UV> next(size_t(r->GetLevel(l).GetNumFVarValues(0)));
+            UV const *src = uvLevels.back().data();
+            UV *dst = next.data();
+            primvar.InterpolateFaceVarying(l, src, dst, 0);
+            uvLevels.push_back(next);
+        }
+    }
     size_t start = 0;
     for (int l = 0; l <= levels; ++l) {
         Far::TopologyLevel const &lv = r->GetLevel(l);
@@ -131,6 +164,18 @@ void refineUniform(Mesh const &m, int levels) {
                 std::printf("%d %d", lv.IsFaceHole(f) ? 1 : 0, fv.size());
                 for (int k = 0; k < fv.size(); ++k) std::printf(" %d", fv[k]);
                 std::printf("\n");
+            }
+            if (r->GetNumFVarChannels() > 0) {
+                // Face-varying values of the level, then each face's value indices.
+                std::vector<UV> const &vals = uvLevels[size_t(l)];
+                std::printf("fvar %d\n", int(vals.size()));
+                for (UV const &t : vals) std::printf("%.17g %.17g\n", t.u, t.v);
+                for (int f = 0; f < lv.GetNumFaces(); ++f) {
+                    Far::ConstIndexArray fvv = lv.GetFaceFVarValues(f, 0);
+                    std::printf("%d", fvv.size());
+                    for (int k = 0; k < fvv.size(); ++k) std::printf(" %d", fvv[k]);
+                    std::printf("\n");
+                }
             }
         }
         start += size_t(lv.GetNumVertices());
@@ -237,7 +282,7 @@ void evaluate(Mesh const &m, int isolation, Far::PatchTableFactory::Options::End
 void usage() {
     std::fprintf(stderr,
                  "usage: osd_oracle MESH.obj [--refine N] [--eval] [--endcap gregory|bspline|legacy] "
-                 "[--isolation L] [--loop]\n");
+                 "[--isolation L] [--loop] [--fvar MODE]\n");
     std::exit(2);
 }
 
@@ -249,6 +294,7 @@ int main(int argc, char **argv) {
     std::string path;
     int levels = 0, isolation = 10;
     bool eval = false, loop = false;
+    auto fvar = Sdc::Options::FVAR_LINEAR_CORNERS_ONLY;
     auto endcap = Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS;
     for (int a = 1; a < argc; ++a) {
         std::string arg = argv[a];
@@ -263,6 +309,15 @@ int main(int argc, char **argv) {
                 eval = true;
             } else if (arg == "--loop") {
                 loop = true;
+            } else if (arg == "--fvar" && a + 1 < argc) {
+                std::string f = argv[++a];
+                if (f == "none") fvar = Sdc::Options::FVAR_LINEAR_NONE;
+                else if (f == "corners-only") fvar = Sdc::Options::FVAR_LINEAR_CORNERS_ONLY;
+                else if (f == "corners-plus1") fvar = Sdc::Options::FVAR_LINEAR_CORNERS_PLUS1;
+                else if (f == "corners-plus2") fvar = Sdc::Options::FVAR_LINEAR_CORNERS_PLUS2;
+                else if (f == "boundaries") fvar = Sdc::Options::FVAR_LINEAR_BOUNDARIES;
+                else if (f == "all") fvar = Sdc::Options::FVAR_LINEAR_ALL;
+                else throw std::runtime_error("unknown --fvar mode '" + f + "'");
             } else if (arg == "--endcap" && a + 1 < argc) {
                 std::string e = argv[++a];
                 if (e == "gregory") endcap = Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS;
@@ -281,6 +336,7 @@ int main(int argc, char **argv) {
     if (path.empty() || (levels == 0 && !eval)) usage();
     Mesh m = osdmesh::readObj<double>(path);
     if (loop) m.scheme = Sdc::SCHEME_LOOP;
+    m.fvarMode = fvar;
     if (levels > 0) refineUniform(m, levels);
     if (eval) evaluate(m, isolation, endcap);
     return 0;

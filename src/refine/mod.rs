@@ -7,6 +7,7 @@
 
 pub mod crease;
 pub mod edit;
+pub mod fvar;
 pub mod level;
 pub mod limit;
 pub mod loop_rules;

@@ -1,0 +1,304 @@
+//! Face-varying refinement of texture coordinates against OpenSubdiv Far
+//! (`PrimvarRefiner::InterpolateFaceVarying` through `osd_oracle --refine N --fvar MODE`), in
+//! all six linear-interpolation modes: every face corner of levels 1–3 carries the same value
+//! as Far's (Far's faces are ours, face by face), within 1e-12 of the values' range.
+
+mod common;
+
+use limitray::mesh::obj::read_obj;
+use limitray::mesh::ControlMesh;
+use limitray::refine::fvar::{self, FVarLevel, FVarMode};
+use limitray::refine::Refiner;
+use std::path::Path;
+
+/// Far's levels: for each level, each face's vertex positions and corner values.
+type FarLevel = Vec<(Vec<[f64; 3]>, Vec<[f64; 2]>)>;
+
+fn far_fvar(bin: &Path, mesh: &Path, levels: usize, mode: &str) -> Vec<FarLevel> {
+    let out = std::process::Command::new(bin)
+        .arg(mesh)
+        .args(["--refine", &levels.to_string(), "--fvar", mode])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    let mut result = Vec::new();
+    while let Some(l) = lines.next() {
+        let t: Vec<&str> = l.split_whitespace().collect();
+        if t[0] != "level" {
+            continue;
+        }
+        let (nv, nf): (usize, usize) = (t[2].parse().unwrap(), t[3].parse().unwrap());
+        let pos: Vec<[f64; 3]> = (0..nv)
+            .map(|_| {
+                let x: Vec<f64> = lines
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|s| s.parse().unwrap())
+                    .collect();
+                [x[0], x[1], x[2]]
+            })
+            .collect();
+        let verts: Vec<Vec<[f64; 3]>> = (0..nf)
+            .map(|_| {
+                let x: Vec<u32> = lines
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|s| s.parse().unwrap())
+                    .collect();
+                x[2..].iter().map(|&v| pos[v as usize]).collect()
+            })
+            .collect();
+        let h: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
+        assert_eq!(h[0], "fvar");
+        let nval: usize = h[1].parse().unwrap();
+        let vals: Vec<[f64; 2]> = (0..nval)
+            .map(|_| {
+                let x: Vec<f64> = lines
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|s| s.parse().unwrap())
+                    .collect();
+                [x[0], x[1]]
+            })
+            .collect();
+        let faces: FarLevel = (0..nf)
+            .map(|i| {
+                let x: Vec<usize> = lines
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|s| s.parse().unwrap())
+                    .collect();
+                (verts[i].clone(), x[1..].iter().map(|&i| vals[i]).collect())
+            })
+            .collect();
+        result.push(faces);
+    }
+    result
+}
+
+/// The largest difference between our face-varying values and Far's over levels 1..=levels
+/// of `path` (whose mesh is `mesh`) under `mode`.
+fn worst_against_far(
+    bin: &Path,
+    path: &Path,
+    mesh: &ControlMesh,
+    levels: usize,
+    mode: FVarMode,
+    mode_name: &str,
+) -> f64 {
+    let name = path.display().to_string();
+    let r = Refiner::new(mesh, levels).unwrap();
+    let far = far_fvar(bin, path, levels, mode_name);
+    let mut cur = FVarLevel {
+        values: mesh.uvs.clone(),
+        corners: mesh.face_uvs.clone(),
+    };
+    let mut worst = 0.0f64;
+    for l in 0..levels {
+        cur = fvar::refine(&r.levels[l], &cur, &r.tables[l], mode);
+        // Far turns a quad's children (child k's corner k is the vertex child) and numbers
+        // them its own way: match faces and corners by vertex positions.
+        let lvl = &r.levels[l + 1];
+        let pos = r.refine_positions(&mesh.positions, l + 1);
+        // Far's vertex at `p`: ours within 1e-9 (both refine the same positions).
+        let vertex_at = |p: &[f64; 3]| -> u32 {
+            let near = |i: &usize| (0..3).all(|a| (pos[*i][a] - p[a]).abs() < 1e-9);
+            (0..pos.len())
+                .find(near)
+                .unwrap_or_else(|| panic!("{name}: no vertex at {p:?}")) as u32
+        };
+        let mut by_verts = std::collections::HashMap::new();
+        for g in 0..lvl.num_faces() {
+            let mut key = lvl.topo.face_vertices(g).to_vec();
+            key.sort_unstable();
+            by_verts.insert(key, g);
+        }
+        let same = |a: &[f64; 3], b: &[f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9);
+        for (far_pos, theirs) in &far[l] {
+            let verts: Vec<u32> = far_pos.iter().map(vertex_at).collect();
+            let mut key = verts.clone();
+            key.sort_unstable();
+            // Coincident vertices (degenerate shapes) can mislead the lookup: then search the
+            // face whose corners are at Far's positions in some rotation.
+            let fits = |g: usize, rot: usize| {
+                let v = lvl.topo.face_vertices(g);
+                v.len() == far_pos.len()
+                    && (0..v.len())
+                        .all(|j| same(&pos[v[(j + rot) % v.len()] as usize], &far_pos[j]))
+            };
+            let (g, rot) = by_verts
+                .get(&key)
+                .and_then(|&g| (0..far_pos.len()).find(|&r| fits(g, r)).map(|r| (g, r)))
+                .or_else(|| {
+                    (0..lvl.num_faces())
+                        .find_map(|g| (0..far_pos.len()).find(|&r| fits(g, r)).map(|r| (g, r)))
+                })
+                .unwrap_or_else(|| panic!("{name} level {}: no face at {far_pos:?}", l + 1));
+            let n = far_pos.len();
+            let o = lvl.topo.face_offsets[g] as usize;
+            for (j, t) in theirs.iter().enumerate() {
+                let ours = cur.values[cur.corners[o + (j + rot) % n] as usize];
+                worst = worst
+                    .max((ours[0] - t[0]).abs())
+                    .max((ours[1] - t[1]).abs());
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn fvar_refinement_matches_far_in_every_mode() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let Some(bin) = common::osd_binary("osd_oracle") else {
+        return;
+    };
+    let mut failures = Vec::new();
+    let mut compared = 0;
+    let names = [
+        "catmark_fvar_bound0",
+        "catmark_fvar_bound1",
+        "catmark_fvar_bound2",
+        "catmark_fvar_bound3",
+        "catmark_fvar_bound4",
+        "catmark_fvar_project0",
+    ];
+    for name in names {
+        let path = models.join(format!("opensubdiv/{name}.obj"));
+        let mesh = read_obj(&path).unwrap();
+        assert!(!mesh.face_uvs.is_empty(), "{name}: no UVs");
+        for (mode, mode_name) in FVarMode::NAMES {
+            let worst = worst_against_far(&bin, &path, &mesh, 3, mode, mode_name);
+            println!("{name} {mode_name}: worst {worst:.2e}");
+            if worst > 1e-12 {
+                failures.push(format!("{name} {mode_name}: {worst:e}"));
+            }
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 36);
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Random UV layouts with seams on the corpus's Catmull-Clark shapes (creases, semi-sharp
+/// corners, boundaries, n-gons, poles): a value per vertex, then islands of faces given
+/// their own copies (seams, junctions where islands meet, corners of one-face islands) and
+/// single edges cut at one end (darts). Levels 1–2 against Far in all six modes, 1e-12.
+#[test]
+fn fvar_refinement_matches_far_on_random_seams() {
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let Some(bin) = common::osd_binary("osd_oracle") else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("limitray-fvar-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut failures = Vec::new();
+    let mut compared = 0;
+    for path in common::catmark_files(&models) {
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        let Ok(mut mesh) = read_obj(&path) else {
+            continue;
+        };
+        if mesh.num_faces() > 400 || name.contains("nonman") || name.contains("flap") {
+            continue;
+        }
+        // Far applies no hierarchical edits.
+        mesh.edits.clear();
+        // A value per vertex, then islands and darts.
+        mesh.uvs = (0..mesh.num_vertices())
+            .map(|_| {
+                [
+                    (next() % 1000) as f64 / 1000.0,
+                    (next() % 1000) as f64 / 1000.0,
+                ]
+            })
+            .collect();
+        mesh.face_uvs = mesh.face_verts.clone();
+        for _ in 0..1 + mesh.num_faces() / 6 {
+            let f = (next() % mesh.num_faces() as u64) as usize;
+            let (a, b) = (
+                mesh.face_offsets[f] as usize,
+                mesh.face_offsets[f + 1] as usize,
+            );
+            if next() % 3 == 0 {
+                // A dart: one corner of the face gets its own value.
+                let c = a + (next() % (b - a) as u64) as usize;
+                mesh.uvs
+                    .push(mesh.uvs[mesh.face_uvs[c] as usize].map(|x| x + 0.01));
+                mesh.face_uvs[c] = (mesh.uvs.len() - 1) as u32;
+            } else {
+                // An island: the face and maybe a neighbour share new copies.
+                for c in a..b {
+                    let v = mesh.face_uvs[c] as usize;
+                    mesh.uvs.push(mesh.uvs[v].map(|x| x + 0.02));
+                    mesh.face_uvs[c] = (mesh.uvs.len() - 1) as u32;
+                }
+            }
+        }
+        let file = dir.join(format!("{name}.obj"));
+        {
+            let mut w = std::io::BufWriter::new(std::fs::File::create(&file).unwrap());
+            use std::io::Write;
+            for p in &mesh.positions {
+                writeln!(w, "v {:?} {:?} {:?}", p[0], p[1], p[2]).unwrap();
+            }
+            for t in &mesh.uvs {
+                writeln!(w, "vt {:?} {:?}", t[0], t[1]).unwrap();
+            }
+            for f in 0..mesh.num_faces() {
+                write!(w, "f").unwrap();
+                for c in mesh.face_offsets[f] as usize..mesh.face_offsets[f + 1] as usize {
+                    write!(w, " {}/{}", mesh.face_verts[c] + 1, mesh.face_uvs[c] + 1).unwrap();
+                }
+                writeln!(w).unwrap();
+            }
+            limitray::mesh::obj::ObjWriter::new(&mut w)
+                .tags(&mesh)
+                .unwrap();
+            if mesh.options.boundary == limitray::mesh::BoundaryInterpolation::EdgeOnly {
+                writeln!(w, "t interpolateboundary 1/0/0 2").unwrap();
+            } else if mesh.options.boundary == limitray::mesh::BoundaryInterpolation::None {
+                writeln!(w, "t interpolateboundary 1/0/0 0").unwrap();
+            }
+            if mesh.options.crease_method == limitray::mesh::CreaseMethod::Chaikin {
+                writeln!(w, "t creasemethod 0/0/1 chaikin").unwrap();
+            }
+        }
+        let back = read_obj(&file).unwrap();
+        for (mode, mode_name) in FVarMode::NAMES {
+            let worst = worst_against_far(&bin, &file, &back, 2, mode, mode_name);
+            if worst > 1e-12 {
+                failures.push(format!("{name} {mode_name}: {worst:e}"));
+            }
+            compared += 1;
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    println!(
+        "{compared} shape-mode pairs, {} differ: {failures:#?}",
+        failures.len()
+    );
+    assert!(compared >= 300, "only {compared}");
+    assert!(failures.is_empty(), "{failures:#?}");
+}
