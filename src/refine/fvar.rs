@@ -285,11 +285,41 @@ fn vertex_value(
         // Continuous around v: the vertex data's own rule.
         return apply_row(parent, values, table, v, faces);
     }
-    // A sharp vertex pins its values; a semi-sharp one (below 1) blends the seam's rule with
-    // the pinned value by its sharpness, as the vertex rule of the positions does.
-    let s = parent.vertex_sharpness[v] as f64;
-    if crease::is_infinite(parent.vertex_sharpness[v]) || s >= 1.0 {
+    // The value's own rule counts its seams as infinitely sharp edges, with the vertex data's
+    // sharp edges inside its sector and the vertex's sharpness: three or more sharp edges, or
+    // a sharp vertex, pin it (a corner). Where that rule turns from corner to crease in the
+    // next level (semi-sharp edges and vertex, uniform rule), the two blend by the average
+    // sharpness of what turns smooth, as the vertex rule of the positions does.
+    let sv = parent.vertex_sharpness[v];
+    let inner: Vec<f32> = topo
+        .vertex_edges(v)
+        .iter()
+        .filter(|&&e| {
+            let e = e as usize;
+            parent.edge_sharpness[e] > 0.0
+                && continuous(parent, values, e)
+                && topo
+                    .edge_face_list(e as u32)
+                    .iter()
+                    .any(|f| sector.contains(f))
+        })
+        .map(|&e| parent.edge_sharpness[e as usize])
+        .collect();
+    let next = |x: f32| if crease::is_infinite(x) { x } else { x - 1.0 };
+    let pinned = |sv: f32, inner: &[f32]| {
+        sv > 0.0 || seams.len() + inner.iter().filter(|&&x| x > 0.0).count() > 2
+    };
+    let inner_next: Vec<f32> = inner.iter().map(|&x| next(x)).collect();
+    if pinned(next(sv), &inner_next) {
         return xv;
+    }
+    let mut s = 0.0f64;
+    if pinned(sv, &inner) {
+        let turning: Vec<f32> = std::iter::once(sv)
+            .chain(inner.iter().copied())
+            .filter(|&x| x > 0.0 && x <= 1.0)
+            .collect();
+        s = turning.iter().map(|&x| x as f64).sum::<f64>() / turning.len().max(1) as f64;
     }
     let corner = sector.len() == 1;
     let junction = siblings.len() >= 3;
