@@ -330,12 +330,17 @@ fn vertex_value(
         .vertex_edges(v)
         .iter()
         .any(|&e| topo.edge_is_boundary(e));
-    let concave = seams.len() == 2
-        && if on_boundary {
-            sector.len() > 2
-        } else {
-            2 * sector.len() > faces.len()
-        };
+    let other_is_corner = siblings.len() == 2
+        && siblings
+            .iter()
+            .any(|&y| y != x && (0..faces.len()).filter(|&i| value_at(i) == y).count() == 1);
+    let concave = other_is_corner
+        || seams.len() == 2
+            && if on_boundary {
+                sector.len() > 2
+            } else {
+                2 * sector.len() > faces.len()
+            };
     let sharp = match mode {
         FVarMode::None => false,
         FVarMode::CornersOnly => corner,
