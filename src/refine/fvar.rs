@@ -221,13 +221,44 @@ fn edge_value(
     (a, b): (u32, u32),
 ) -> [f64; 2] {
     if mode != FVarMode::All && continuous(parent, values, e) {
-        return apply_row(
-            parent,
-            values,
-            table,
-            first_edge_row + e,
-            parent.topo.edge_face_list(e as u32),
+        let topo = &parent.topo;
+        let faces = topo.edge_face_list(e as u32);
+        let corner_values: Vec<&[u32]> = faces
+            .iter()
+            .map(|&f| {
+                let o = topo.face_offsets[f as usize] as usize;
+                &values.corners[o..o + topo.face_size(f as usize)]
+            })
+            .collect();
+        // Faces that share a vertex besides the edge's (a valence-2 vertex) may hold it with
+        // different values: then the edge rule runs on the values themselves (uniform rule).
+        let shared_twice = {
+            let [va, vb] = topo.edge_verts[e];
+            let f0 = topo.face_vertices(faces[0] as usize);
+            let f1 = topo.face_vertices(faces[1] as usize);
+            f0.iter().any(|u| *u != va && *u != vb && f1.contains(u))
+        };
+        if !shared_twice {
+            return apply_row(parent, values, table, first_edge_row + e, faces);
+        }
+        let s = parent.edge_sharpness[e];
+        let mut acc = super::stencil::Accumulator::new();
+        super::rules::edge_mask(
+            &mut acc,
+            a,
+            b,
+            &corner_values,
+            s,
+            crease::is_sharp(if crease::is_infinite(s) { s } else { s - 1.0 }),
+            parent.smooth_triangles,
         );
+        let mut out = [0.0; 2];
+        for &(i, w) in acc.terms() {
+            let x = values.values[i as usize];
+            out[0] += w * x[0];
+            out[1] += w * x[1];
+        }
+        return out;
     }
     let (x, y) = (values.values[a as usize], values.values[b as usize]);
     [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])]
@@ -282,8 +313,74 @@ fn vertex_value(
         }
     }
     if seams.is_empty() {
-        // Continuous around v: the vertex data's own rule.
-        return apply_row(parent, values, table, v, faces);
+        // Continuous around v: the vertex data's own rule, from its stencil row unless a
+        // vertex of the ring has two values in it (faces sharing more than an edge, at
+        // valence-2 vertices): then the rule runs on the values themselves (uniform rule).
+        let mut seen: HashMap<u32, u32> = HashMap::new();
+        let ambiguous = faces.iter().any(|&f| {
+            let o = topo.face_offsets[f as usize] as usize;
+            topo.face_vertices(f as usize)
+                .iter()
+                .enumerate()
+                .any(|(k, &u)| {
+                    *seen.entry(u).or_insert(values.corners[o + k]) != values.corners[o + k]
+                })
+        });
+        if !ambiguous {
+            return apply_row(parent, values, table, v, faces);
+        }
+        let edges = topo.vertex_edges(v);
+        let ends: Vec<u32> = edges
+            .iter()
+            .map(|&e| {
+                let [a, _] = topo.edge_verts[e as usize];
+                let (p, q) = edge_pairs(parent, values, e as usize)[0];
+                if a as usize == v {
+                    q
+                } else {
+                    p
+                }
+            })
+            .collect();
+        let es: Vec<f32> = edges
+            .iter()
+            .map(|&e| parent.edge_sharpness[e as usize])
+            .collect();
+        let next = |x: f32| {
+            if crease::is_infinite(x) {
+                x
+            } else {
+                (x - 1.0).max(0.0)
+            }
+        };
+        let cs: Vec<f32> = es.iter().map(|&x| next(x)).collect();
+        let face_values: Vec<&[u32]> = faces
+            .iter()
+            .map(|&f| {
+                let o = topo.face_offsets[f as usize] as usize;
+                &values.corners[o..o + topo.face_size(f as usize)]
+            })
+            .collect();
+        let mut acc = super::stencil::Accumulator::new();
+        super::rules::vertex_mask(
+            &mut acc,
+            &super::rules::VertexRing {
+                center: x,
+                edge_ends: &ends,
+                edge_sharpness: &es,
+                child_edge_sharpness: &cs,
+                faces: &face_values,
+                sharpness: parent.vertex_sharpness[v],
+                child_sharpness: next(parent.vertex_sharpness[v]),
+            },
+        );
+        let mut out = [0.0; 2];
+        for &(i, w) in acc.terms() {
+            let y = values.values[i as usize];
+            out[0] += w * y[0];
+            out[1] += w * y[1];
+        }
+        return out;
     }
     // The value's own rule counts its seams as infinitely sharp edges, with the vertex data's
     // sharp edges inside its sector and the vertex's sharpness: three or more sharp edges, or
