@@ -3,6 +3,8 @@
 //! all six linear-interpolation modes: every face corner of levels 1–3 carries the same value
 //! as Far's (Far's faces are ours, face by face), within 1e-12 of the values' range.
 
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use limitray::mesh::obj::read_obj;

@@ -434,7 +434,9 @@ fn vertex_value(
     let concave = other_is_corner
         || seams.len() == 2
             && if on_boundary {
-                sector.len() > 2
+                // A boundary vertex with one value is the mesh's own boundary, not a corner of
+                // the values.
+                siblings.len() >= 2 && sector.len() > 2
             } else {
                 2 * sector.len() > faces.len()
             };
