@@ -1,7 +1,8 @@
 //! Face-varying refinement of texture coordinates against OpenSubdiv Far
 //! (`PrimvarRefiner::InterpolateFaceVarying` through `osd_oracle --refine N --fvar MODE`), in
-//! all six linear-interpolation modes: every face corner of levels 1–3 carries the same value
-//! as Far's (Far's faces are ours, face by face), within 1e-12 of the values' range.
+//! all six linear-interpolation modes: every face corner carries the same value as Far's
+//! within 1e-12 (values in [0, 1]). Faces and corners are matched by vertex position: Far
+//! turns the children of quads and numbers vertices its own way.
 
 #![allow(clippy::needless_range_loop)]
 
