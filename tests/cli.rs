@@ -891,3 +891,58 @@ fn refine_points(text: &str) -> Vec<[f64; 3]> {
         })
         .collect()
 }
+
+/// `refine --uv` needs texture coordinates and a Catmull-Clark mesh, and `--fvar` takes only
+/// OpenSubdiv's six mode names: each mistake is a clear error and no output file.
+#[test]
+fn refine_uv_refuses_what_it_cannot_do() {
+    let dir = TempDir::new("uv");
+    let mesh = dir.file("cube.obj", CUBE);
+    let out = dir.path("r.obj");
+    let o = limitray(&[&"refine", &mesh, &"--uv", &"-o", &out]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("cube.obj") && err.contains("no texture coordinates"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = limitray(&[
+        &"refine",
+        &mesh,
+        &"--uv",
+        &"--fvar",
+        &"sometimes",
+        &"-o",
+        &out,
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("unknown mode 'sometimes'") && err.contains("corners-plus1"),
+        "{err}"
+    );
+    // With texture coordinates: one `vt` per refined value, faces as `f v/vt`.
+    let textured = dir.file(
+        "quad.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
+    );
+    let o = limitray(&[
+        &"refine", &textured, &"--uv", &"--fvar", &"all", &"--level", &"2", &"-o", &out,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("vt ")).count(), 25);
+    assert_eq!(text.lines().filter(|l| l.starts_with("f ")).count(), 16);
+    assert!(text
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .all(|l| l.split_whitespace().skip(1).all(|c| c.contains('/'))));
+    // Bilinear (`all`) on one quad: the values are the bilinear lattice of quarters.
+    for l in text.lines().filter(|l| l.starts_with("vt ")) {
+        for x in l.split_whitespace().skip(1) {
+            let x: f64 = x.parse().unwrap();
+            assert_eq!((x * 4.0).fract(), 0.0, "{l}");
+        }
+    }
+}

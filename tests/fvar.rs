@@ -191,6 +191,56 @@ fn worst_against_far(
             }
         }
     }
+    // The command line writes the library's values: `refine --uv --fvar MODE` at the last
+    // level holds, face by face, the same positions and corner values bit for bit.
+    let out = std::env::temp_dir().join(format!(
+        "limitray-fvar-cli-{}-{}.obj",
+        std::process::id(),
+        name.replace(['/', '.'], "_")
+    ));
+    let run = common::run_limitray(
+        &[
+            "refine".as_ref(),
+            path.as_os_str(),
+            "--level".as_ref(),
+            levels.to_string().as_ref(),
+            "--uv".as_ref(),
+            "--fvar".as_ref(),
+            mode_name.as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ],
+        None,
+    );
+    assert!(
+        run.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let written = read_obj(&out).unwrap();
+    std::fs::remove_file(&out).ok();
+    let lvl = &r.levels[levels];
+    let pos = r.refine_positions(&mesh.positions, levels);
+    let kept: Vec<usize> = (0..lvl.num_faces())
+        .filter(|&f| !lvl.face_hole[f])
+        .collect();
+    assert_eq!(written.num_faces(), kept.len(), "{name} {mode_name}");
+    for (i, &f) in kept.iter().enumerate() {
+        let o = lvl.topo.face_offsets[f] as usize;
+        let w = written.face_offsets[i] as usize;
+        for k in 0..lvl.topo.face_size(f) {
+            let v = lvl.topo.face_vertices(f)[k] as usize;
+            assert_eq!(
+                written.positions[written.face_verts[w + k] as usize],
+                pos[v]
+            );
+            assert_eq!(
+                written.uvs[written.face_uvs[w + k] as usize],
+                cur.values[cur.corners[o + k] as usize],
+                "{name} {mode_name}: face {f} corner {k}"
+            );
+        }
+    }
     worst
 }
 

@@ -4,7 +4,9 @@
 use crate::dice::{DiceOptions, DiceRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::obj::read_obj;
-use crate::mesh::{generate, BoundaryInterpolation, ControlMesh, CreaseMethod, Options, Scheme};
+use crate::mesh::{
+    generate, BoundaryInterpolation, ControlMesh, CreaseMethod, FVarMode, Options, Scheme,
+};
 use crate::patch::approx::Approximation;
 use crate::patch::PatchOptions;
 use std::path::{Path, PathBuf};
@@ -74,7 +76,7 @@ impl From<SurfaceArg> for Approximation {
     }
 }
 
-/// Rule overrides: `--scheme`, `--chaikin`, `--boundary`, `--smooth-triangles`.
+/// Rule overrides: `--scheme`, `--chaikin`, `--boundary`, `--smooth-triangles`, `--fvar`.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct RuleArgs {
     /// Subdivision scheme (default catmark: an OBJ file does not name its scheme).
@@ -90,6 +92,18 @@ pub struct RuleArgs {
     /// smooth`): edge points next to triangles weight the triangles' face points more.
     #[arg(long)]
     pub smooth_triangles: bool,
+    /// Face-varying (texture coordinate) interpolation: none, corners-only, corners-plus1
+    /// (default, USD's), corners-plus2, boundaries or all (OpenSubdiv Far's own default).
+    #[arg(long, value_name = "MODE", value_parser = parse_fvar)]
+    pub fvar: Option<FVarMode>,
+}
+
+/// Parses `--fvar MODE`.
+fn parse_fvar(s: &str) -> std::result::Result<FVarMode, String> {
+    FVarMode::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = FVarMode::NAMES.iter().map(|(_, n)| *n).collect();
+        format!("unknown mode '{s}' (one of {})", names.join(", "))
+    })
 }
 
 impl RuleArgs {
@@ -107,6 +121,9 @@ impl RuleArgs {
         }
         if self.smooth_triangles {
             o.smooth_triangles = true;
+        }
+        if let Some(f) = self.fvar {
+            o.fvar = f;
         }
         o
     }

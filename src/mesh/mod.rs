@@ -60,6 +60,53 @@ impl Scheme {
     }
 }
 
+/// OpenSubdiv's face-varying linear interpolation (`Sdc::Options::FVarLinearInterpolation`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FVarMode {
+    /// Smooth everywhere; seams use the crease rule even at corners.
+    None,
+    /// Corners of the value topology (a value of one face) are sharp.
+    CornersOnly,
+    /// Corners and junctions of three or more values are sharp (USD's default).
+    #[default]
+    CornersPlus1,
+    /// As `CornersPlus1`, and darts (a seam ending inside) and concave corners too.
+    CornersPlus2,
+    /// Every value on a seam or boundary is linear.
+    Boundaries,
+    /// Bilinear everywhere.
+    All,
+}
+
+impl FVarMode {
+    /// Every mode with its name on the command line.
+    pub const NAMES: [(FVarMode, &'static str); 6] = [
+        (FVarMode::None, "none"),
+        (FVarMode::CornersOnly, "corners-only"),
+        (FVarMode::CornersPlus1, "corners-plus1"),
+        (FVarMode::CornersPlus2, "corners-plus2"),
+        (FVarMode::Boundaries, "boundaries"),
+        (FVarMode::All, "all"),
+    ];
+
+    /// The mode's name on the command line and in scenes.
+    pub fn name(self) -> &'static str {
+        Self::NAMES
+            .iter()
+            .find(|(m, _)| *m == self)
+            .map(|(_, n)| *n)
+            .unwrap_or("corners-plus1")
+    }
+
+    /// The mode named `name` (`none`, `corners-only`, …).
+    pub fn from_name(name: &str) -> Option<FVarMode> {
+        Self::NAMES
+            .iter()
+            .find(|(_, n)| *n == name)
+            .map(|(m, _)| *m)
+    }
+}
+
 /// Subdivision options that apply to a whole mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Options {
@@ -75,6 +122,10 @@ pub struct Options {
     /// weight (0.47 instead of 0.25), which rounds triangles out like Loop's scheme would.
     /// Off by default (`TRI_SUB_CATMARK`, the plain Catmull-Clark rule).
     pub smooth_triangles: bool,
+    /// Face-varying linear interpolation of the texture coordinates (`--fvar`, scene key
+    /// `fvar`); corners-plus1 (USD's default) unless the caller says otherwise. OpenSubdiv's
+    /// own `Sdc::Options` default is `FVAR_LINEAR_ALL` ([`FVarMode::All`]).
+    pub fvar: FVarMode,
 }
 
 /// A semi-sharp (or infinitely sharp) edge between two control vertices.

@@ -214,6 +214,44 @@ impl<'a, W: Write + ?Sized> ObjWriter<'a, W> {
         Ok(())
     }
 
+    /// One `f v/vt …` line per face, with `face_uvs` (parallel to `face_verts`) the texture
+    /// coordinate of each corner. Offsets as in [`Self::faces`].
+    pub fn faces_with_uvs(
+        &mut self,
+        face_offsets: &[u32],
+        face_verts: &[u32],
+        face_uvs: &[u32],
+    ) -> std::io::Result<()> {
+        if face_uvs.len() != face_verts.len() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "{} texture corners for {} face-vertices",
+                    face_uvs.len(),
+                    face_verts.len()
+                ),
+            ));
+        }
+        for pair in face_offsets.windows(2) {
+            let (a, b) = (pair[0] as usize, pair[1] as usize);
+            let (Some(vs), Some(ts)) = (face_verts.get(a..b), face_uvs.get(a..b)) else {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!(
+                        "face offsets {a}..{b} do not fit {} face-vertices",
+                        face_verts.len()
+                    ),
+                ));
+            };
+            self.w.write_all(b"f")?;
+            for (&v, &t) in vs.iter().zip(ts) {
+                write!(self.w, " {}/{}", u64::from(v) + 1, u64::from(t) + 1)?;
+            }
+            self.w.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+
     /// OpenSubdiv's tags of `m`: `t crease 2/1 a b s`, `t corner 1/1 v s`, `t hole 1/0 f`.
     pub fn tags(&mut self, m: &ControlMesh) -> std::io::Result<()> {
         for c in &m.creases {

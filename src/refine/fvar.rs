@@ -16,43 +16,7 @@ use super::level::Level;
 use super::stencil::StencilTable;
 use std::collections::HashMap;
 
-/// OpenSubdiv's face-varying linear interpolation (`Sdc::Options::FVarLinearInterpolation`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum FVarMode {
-    /// Smooth everywhere; seams use the crease rule even at corners.
-    None,
-    /// Corners of the value topology (a value of one face) are sharp.
-    CornersOnly,
-    /// Corners and junctions of three or more values are sharp (USD's default).
-    #[default]
-    CornersPlus1,
-    /// As `CornersPlus1`, and darts (a seam ending inside) and concave corners too.
-    CornersPlus2,
-    /// Every value on a seam or boundary is linear.
-    Boundaries,
-    /// Bilinear everywhere.
-    All,
-}
-
-impl FVarMode {
-    /// Every mode with its name on the command line.
-    pub const NAMES: [(FVarMode, &'static str); 6] = [
-        (FVarMode::None, "none"),
-        (FVarMode::CornersOnly, "corners-only"),
-        (FVarMode::CornersPlus1, "corners-plus1"),
-        (FVarMode::CornersPlus2, "corners-plus2"),
-        (FVarMode::Boundaries, "boundaries"),
-        (FVarMode::All, "all"),
-    ];
-
-    /// The mode named `name` (`none`, `corners-only`, …).
-    pub fn from_name(name: &str) -> Option<FVarMode> {
-        Self::NAMES
-            .iter()
-            .find(|(_, n)| *n == name)
-            .map(|(m, _)| *m)
-    }
-}
+pub use crate::mesh::FVarMode;
 
 /// The face-varying values of one level: `values` and, parallel to the level's
 /// `topo.face_verts`, each face corner's value index.

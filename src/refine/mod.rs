@@ -171,6 +171,42 @@ impl Refiner {
         cur
     }
 
+    /// The face-varying texture coordinates of `mesh` (its `vt` and `f v/vt` corners) refined
+    /// to `level` in the options' [`crate::mesh::FVarMode`]: values and, parallel to
+    /// `levels[level].topo.face_verts`, each face corner's value index. Catmull-Clark only; a
+    /// mesh without texture coordinates is an error.
+    pub fn refine_uvs(&self, mesh: &ControlMesh, level: usize) -> Result<fvar::FVarLevel> {
+        if mesh.face_uvs.is_empty() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "the mesh has no texture coordinates (no `vt` in its faces)",
+            ));
+        }
+        if self.options.scheme != Scheme::Catmark {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "face-varying refinement is built for Catmull-Clark meshes only",
+            ));
+        }
+        if level >= self.levels.len() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                format!(
+                    "level {level} is beyond the refiner's {}",
+                    self.levels.len() - 1
+                ),
+            ));
+        }
+        let mut cur = fvar::FVarLevel {
+            values: mesh.uvs.clone(),
+            corners: mesh.face_uvs.clone(),
+        };
+        for l in 0..level {
+            cur = fvar::refine(&self.levels[l], &cur, &self.tables[l], self.options.fvar);
+        }
+        Ok(cur)
+    }
+
     /// Bytes used by the stencil tables.
     pub fn table_bytes(&self) -> usize {
         self.tables.iter().map(|t| t.bytes()).sum()

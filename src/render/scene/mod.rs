@@ -108,6 +108,9 @@ pub struct MeshDesc {
     /// Displacement along the limit normal (`displace = "noise:AMPLITUDE:FREQUENCY"`, in the
     /// mesh's object space), applied at dicing.
     pub displace: Option<crate::dice::Displacement>,
+    /// Face-varying interpolation of the mesh's texture coordinates (`fvar = "corners-plus1"`,
+    /// the default, or any `--fvar` mode).
+    pub fvar: crate::mesh::FVarMode,
     /// Line of the entry in the scene file, for messages.
     pub line: usize,
 }
@@ -381,6 +384,23 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
                     .map_err(|e: Error| src.err(s.span(), e.message))?,
             ),
         };
+        let fvar = match &r.fvar {
+            None => crate::mesh::FVarMode::default(),
+            Some(s) => crate::mesh::FVarMode::from_name(s.get_ref()).ok_or_else(|| {
+                let names: Vec<&str> = crate::mesh::FVarMode::NAMES
+                    .iter()
+                    .map(|(_, n)| *n)
+                    .collect();
+                src.err(
+                    s.span(),
+                    format!(
+                        "unknown fvar mode '{}' (one of {})",
+                        s.get_ref(),
+                        names.join(", ")
+                    ),
+                )
+            })?,
+        };
         meshes.push(MeshDesc {
             file: base.join(r.file.get_ref()),
             material,
@@ -391,6 +411,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
             scheme,
             surface,
             displace,
+            fvar,
             line: src.line_of(m.span().start),
         });
     }

@@ -127,6 +127,7 @@ pub(super) struct RawMesh {
     pub(super) scheme: Option<Spanned<String>>,
     pub(super) surface: Option<Spanned<String>>,
     pub(super) displace: Option<Spanned<String>>,
+    pub(super) fvar: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
