@@ -203,6 +203,7 @@ fn options_strategy() -> impl Strategy<Value = Options> {
             },
             smooth_triangles,
             scheme: Scheme::Catmark,
+            ..Options::default()
         })
 }
 
