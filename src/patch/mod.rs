@@ -16,6 +16,7 @@ pub mod regular;
 pub mod single_crease;
 pub mod stam;
 pub mod table;
+pub mod uv;
 
 pub use bspline::{Basis, ControlGrid, Mat4, PatchPoint};
 pub use loop_surface::LoopSurface;

@@ -8,6 +8,7 @@
 pub mod crease;
 pub mod edit;
 pub mod fvar;
+pub mod fvar_mesh;
 pub mod level;
 pub mod limit;
 pub mod loop_rules;

@@ -1,0 +1,136 @@
+//! Limit texture coordinates at `(face, k, u, v)`: the limit surface of the mesh's
+//! face-varying values ([`crate::refine::fvar_mesh`]) through a patch table of their own, or,
+//! in mode [`FVarMode::All`], the bilinear interpolation of each (sub-)face's corners (the
+//! limit of bilinear refinement). A face keeps its corners in the value mesh, so the same
+//! `(face, k, u, v)` addresses both surfaces.
+
+use super::table::{PatchOptions, PatchTable};
+use crate::coord::FaceCoord;
+use crate::error::{Error, ErrorKind, Result};
+use crate::mesh::{ControlMesh, FVarMode, Scheme};
+
+/// Texture coordinates of a surface's points (see the module).
+#[derive(Clone, Debug)]
+pub enum UvSurface {
+    /// Bilinear per (sub-)face: the mesh's values and corners.
+    Bilinear {
+        /// `vt` values.
+        values: Vec<[f64; 2]>,
+        /// Value of each face corner (parallel to the mesh's `face_verts`).
+        corners: Vec<u32>,
+        /// The mesh's face offsets.
+        offsets: Vec<u32>,
+    },
+    /// The limit surface of the value mesh.
+    Smooth(Box<PatchTable>),
+}
+
+/// The `(s, t)` at a point and their derivatives in the (sub-)face's `u` and `v`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct UvSample {
+    /// Texture coordinates.
+    pub st: [f64; 2],
+    /// `∂(s, t)/∂u`.
+    pub du: [f64; 2],
+    /// `∂(s, t)/∂v`.
+    pub dv: [f64; 2],
+}
+
+impl UvSurface {
+    /// The texture coordinates of `mesh` in `mode`; `None` for a mesh without texture
+    /// coordinates. Loop meshes are refused (their face-varying rules are not built).
+    pub fn new(mesh: &ControlMesh, mode: FVarMode) -> Result<Option<UvSurface>> {
+        if mesh.face_uvs.is_empty() {
+            return Ok(None);
+        }
+        if mesh.options.scheme != Scheme::Catmark {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "texture coordinates of Loop meshes are not supported (face-varying Loop \
+                 refinement is not built)",
+            ));
+        }
+        if mode == FVarMode::All {
+            return Ok(Some(UvSurface::Bilinear {
+                values: mesh.uvs.clone(),
+                corners: mesh.face_uvs.clone(),
+                offsets: mesh.face_offsets.clone(),
+            }));
+        }
+        let values = crate::refine::fvar_mesh::uv_mesh(mesh, mode)?;
+        let table = PatchTable::new(&values, PatchOptions::default())?;
+        Ok(Some(UvSurface::Smooth(Box::new(table))))
+    }
+
+    /// Texture coordinates and their derivatives at `at`.
+    pub fn eval(&self, at: FaceCoord) -> Result<UvSample> {
+        match self {
+            UvSurface::Smooth(t) => {
+                let s = t.eval(at)?;
+                Ok(UvSample {
+                    st: [s.p[0], s.p[1]],
+                    du: [s.du[0], s.du[1]],
+                    dv: [s.dv[0], s.dv[1]],
+                })
+            }
+            UvSurface::Bilinear {
+                values,
+                corners,
+                offsets,
+            } => {
+                let f = at.face as usize;
+                if f + 1 >= offsets.len() {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!("face {f} out of range"),
+                    ));
+                }
+                let (a, b) = (offsets[f] as usize, offsets[f + 1] as usize);
+                let n = b - a;
+                let k = at.k as usize;
+                if (n == 4 && k != 0) || k >= n {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!("face {f} has no sub-face {k}"),
+                    ));
+                }
+                let x = |i: usize| values[corners[a + i % n] as usize];
+                let mid = |p: [f64; 2], q: [f64; 2]| [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+                // The (sub-)face's corners at (0,0), (1,0), (1,1), (0,1).
+                let c = if n == 4 {
+                    [x(0), x(1), x(2), x(3)]
+                } else {
+                    let mut centre = [0.0; 2];
+                    for i in 0..n {
+                        centre[0] += x(i)[0] / n as f64;
+                        centre[1] += x(i)[1] / n as f64;
+                    }
+                    [x(k), mid(x(k), x(k + 1)), centre, mid(x(k + n - 1), x(k))]
+                };
+                let (u, v) = (at.u, at.v);
+                let mut out = UvSample::default();
+                for j in 0..2 {
+                    out.st[j] = (1.0 - u) * (1.0 - v) * c[0][j]
+                        + u * (1.0 - v) * c[1][j]
+                        + u * v * c[2][j]
+                        + (1.0 - u) * v * c[3][j];
+                    out.du[j] = (1.0 - v) * (c[1][j] - c[0][j]) + v * (c[2][j] - c[3][j]);
+                    out.dv[j] = (1.0 - u) * (c[3][j] - c[0][j]) + u * (c[2][j] - c[1][j]);
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        match self {
+            UvSurface::Smooth(t) => t.bytes(),
+            UvSurface::Bilinear {
+                values,
+                corners,
+                offsets,
+            } => values.len() * 16 + (corners.len() + offsets.len()) * 4,
+        }
+    }
+}
