@@ -42,6 +42,7 @@ use crate::exact::{ExactTrace, ExactTracer};
 use crate::grid::GridMesh;
 use crate::mesh::obj::read_obj;
 use crate::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options};
+use crate::patch::uv::{UvSample, UvSurface};
 use crate::patch::{PatchOptions, PatchTable, Sample};
 use std::path::Path;
 use std::sync::Arc;
@@ -63,6 +64,9 @@ pub struct SurfaceOptions {
     pub scheme: Option<crate::mesh::Scheme>,
     /// The surface of a Loop mesh: exact, or one of paper 002's approximations.
     pub surface: crate::patch::approx::Approximation,
+    /// Face-varying interpolation of the texture coordinates override (the mesh's own,
+    /// corners-plus1 unless set, otherwise).
+    pub fvar: Option<crate::mesh::FVarMode>,
 }
 
 impl Default for SurfaceOptions {
@@ -74,6 +78,7 @@ impl Default for SurfaceOptions {
             single_crease: true,
             scheme: None,
             surface: crate::patch::approx::Approximation::Exact,
+            fvar: None,
         }
     }
 }
@@ -86,6 +91,8 @@ pub struct Surface {
     warnings: Vec<String>,
     /// The reference intersector, built by the first exact query.
     exact: std::sync::OnceLock<ExactTracer>,
+    /// The limit texture coordinates, built by the first query.
+    uv: std::sync::OnceLock<Option<UvSurface>>,
 }
 
 impl Surface {
@@ -102,6 +109,9 @@ impl Surface {
         if let Some(scheme) = options.scheme {
             rules.scheme = scheme;
         }
+        if let Some(f) = options.fvar {
+            rules.fvar = f;
+        }
         let table = PatchTable::with_options(
             &mesh,
             rules,
@@ -112,11 +122,16 @@ impl Surface {
             },
         )?;
         let warnings = mesh.warnings.iter().map(|w| w.to_string()).collect();
+        let mesh = ControlMesh {
+            options: rules,
+            ..mesh
+        };
         Ok(Surface {
             mesh,
             table: Arc::new(table),
             warnings,
             exact: std::sync::OnceLock::new(),
+            uv: std::sync::OnceLock::new(),
         })
     }
 
@@ -183,6 +198,25 @@ impl Surface {
     /// Crack-free triangles on the limit surface (vertices exact limit points).
     pub fn dice(&self, options: &DiceOptions) -> Result<DicedMesh> {
         dice(&self.table, &self.mesh, options)
+    }
+
+    /// The limit texture coordinates at `at` and their derivatives in `u` and `v`: the limit of
+    /// the mesh's face-varying values in its [`crate::mesh::FVarMode`]
+    /// ([`crate::patch::uv`]). `None` for a mesh without texture coordinates; an error where
+    /// `at` has no surface, or for Loop meshes.
+    pub fn uv(&self, at: FaceCoord) -> Result<Option<UvSample>> {
+        let uv = match self.uv.get() {
+            Some(u) => u,
+            None => {
+                let u = UvSurface::new(&self.mesh, self.mesh.options.fvar)?;
+                self.uv.get_or_init(|| u)
+            }
+        };
+        if uv.is_some() {
+            // Holes and points outside the domain answer as the surface does.
+            self.table.eval(at)?;
+        }
+        uv.as_ref().map(|u| u.eval(at)).transpose()
     }
 
     /// The reference intersector of the surface (built on first use, then kept): certified

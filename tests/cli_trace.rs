@@ -227,3 +227,87 @@ fn loop_meshes_trace_exactly() {
         }
     }
 }
+
+/// `trace --uv` appends the hit's limit texture coordinates: on a cube whose faces each carry
+/// the whole unit square (one island per face), mode `all` gives `(s, t) = (u, v)` of the hit
+/// (bilinear corners (0,0), (1,0), (1,1), (0,1); 1e-15 for the interpolation's rounding), and
+/// every mode, diced or exact, gives what `Surface::uv` gives at the printed `(face, k, u, v)`,
+/// bit for bit. A mesh without texture coordinates is refused.
+#[test]
+fn trace_reports_texture_coordinates() {
+    use limitray::{FaceCoord, Surface, SurfaceOptions};
+    let dir = std::env::temp_dir().join(format!("limitray-uv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut obj = String::new();
+    for i in 0..8 {
+        let c = |b: usize| if i >> b & 1 == 1 { 1 } else { -1 };
+        obj += &format!("v {} {} {}\n", c(0), c(1), c(2));
+    }
+    obj += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+    for f in [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ] {
+        obj += &format!(
+            "f {}/1 {}/2 {}/3 {}/4\n",
+            f[0] + 1,
+            f[1] + 1,
+            f[2] + 1,
+            f[3] + 1
+        );
+    }
+    let path = dir.join("cube.obj");
+    std::fs::write(&path, obj).unwrap();
+    let p = path.to_str().unwrap();
+    let rays = "0 0 0 0.3 0.2 1\n0 0 0 -1 0.4 0.1\n0 0 0 0.2 -1 -0.3\n5 5 5 1 0 0\n";
+    for mode in ["all", "corners-plus1", "none"] {
+        let s = Surface::from_obj(
+            &path,
+            SurfaceOptions {
+                fvar: limitray::mesh::FVarMode::from_name(mode),
+                ..SurfaceOptions::default()
+            },
+        )
+        .unwrap();
+        for exact in [false, true] {
+            let mut args = vec!["trace", p, "--uv", "--fvar", mode, "--rate", "8"];
+            if exact {
+                args.push("--exact");
+            }
+            let o = run(&args, rays);
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let out = String::from_utf8(o.stdout).unwrap();
+            let lines: Vec<&str> = out.lines().collect();
+            assert_eq!(lines.len(), 4);
+            assert_eq!(lines[3], "miss");
+            for l in &lines[..3] {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                let x = |i: usize| f[i].parse::<f64>().unwrap();
+                let at = FaceCoord::new(f[2].parse().unwrap(), f[3].parse().unwrap(), x(4), x(5));
+                let n = f.len();
+                let (st_s, st_t) = (x(n - 2), x(n - 1));
+                let want = s.uv(at).unwrap().unwrap().st;
+                assert_eq!([st_s, st_t], want, "{mode} {l}");
+                if mode == "all" {
+                    assert!(
+                        (st_s - at.u).abs() < 1e-15 && (st_t - at.v).abs() < 1e-15,
+                        "{l}"
+                    );
+                }
+            }
+        }
+    }
+    let plain = scene("creased_cube.obj");
+    let o = run(&["trace", &plain, "--uv"], rays);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("creased_cube.obj") && err.contains("no texture coordinates"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

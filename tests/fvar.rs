@@ -438,3 +438,83 @@ fn fvar_refinement_matches_far_on_random_seams() {
     assert!(gaps.is_empty(), "{gaps:#?}");
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Texture coordinates that are the vertices' own `(x, y)`, without seams, have the surface's
+/// limit as their limit (the value mesh is the mesh): `Surface::uv` equals `Surface::eval`'s
+/// `x y` and derivatives on every corpus shape, at random points, within 1e-12 of the shape's
+/// size (both are the same patch evaluations of the same points). In mode `none` for every
+/// shape; in corners-plus1 for shapes with edge-and-corner boundaries (with edge-only ones the
+/// mode sharpens the values' corners, which the positions leave smooth) and manifold edges
+/// (the values' side of a non-manifold edge is a seam, pinned where three meet). Shapes with boundary
+/// interpolation `none` are left out: their boundary faces are holes of the surface only.
+#[test]
+fn texture_coordinates_that_are_the_positions_have_the_surfaces_limit() {
+    use limitray::{FaceCoord, Surface, SurfaceOptions};
+    let Some(models) = common::shared_models() else {
+        return;
+    };
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut unit = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut checked = 0;
+    for path in common::catmark_files(&models) {
+        let Ok(mut mesh) = read_obj(&path) else {
+            continue;
+        };
+        if mesh.num_faces() > 400
+            || mesh.options.boundary == limitray::mesh::BoundaryInterpolation::None
+        {
+            continue;
+        }
+        // Hierarchical edits move positions, not texture coordinates.
+        mesh.edits.clear();
+        let edge_and_corner =
+            mesh.options.boundary == limitray::mesh::BoundaryInterpolation::EdgeAndCorner;
+        mesh.uvs = mesh.positions.iter().map(|p| [p[0], p[1]]).collect();
+        mesh.face_uvs = mesh.face_verts.clone();
+        let size = mesh
+            .positions
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, x| m.max(x.abs()))
+            .max(1.0);
+        let name = path.display().to_string();
+        for mode in [FVarMode::None, FVarMode::CornersPlus1] {
+            let non_manifold = ["nonman", "fan", "flap"].iter().any(|n| name.contains(n));
+            if mode == FVarMode::CornersPlus1 && (!edge_and_corner || non_manifold) {
+                continue;
+            }
+            let options = SurfaceOptions {
+                fvar: Some(mode),
+                ..SurfaceOptions::default()
+            };
+            let s = match Surface::new(mesh.clone(), options) {
+                Ok(s) => s,
+                Err(_) => continue,
+            };
+            for _ in 0..50 {
+                let f = (unit() * s.num_faces() as f64) as u32;
+                let k = (unit() * s.sub_faces(f) as f64) as u32;
+                let at = FaceCoord::new(f, k, unit(), unit());
+                let Some(p) = s.eval(at) else {
+                    continue;
+                };
+                let uv = s.uv(at).unwrap().expect("the mesh has texture coordinates");
+                for j in 0..2 {
+                    for (a, b) in [(uv.st[j], p.p[j]), (uv.du[j], p.du[j]), (uv.dv[j], p.dv[j])] {
+                        assert!(
+                            (a - b).abs() <= 1e-12 * size,
+                            "{name} {mode:?} {at:?}: {a} vs {b}"
+                        );
+                    }
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 3000, "{checked}");
+}

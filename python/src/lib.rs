@@ -10,8 +10,9 @@ use limitray::grid::GridMesh;
 use limitray::dice::{dice, DiceOptions, DiceRate, Displacement};
 use limitray::error::{Error, ErrorKind};
 use limitray::mesh::obj::read_obj;
-use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, Options, Scheme};
+use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, FVarMode, Options, Scheme};
 use limitray::patch::approx::Approximation;
+use limitray::patch::uv::UvSurface;
 use limitray::patch::{LoopSurface, PatchOptions, PatchTable};
 use limitray::refine::Refiner;
 use limitray::exact::{ExactTrace, ExactTracer};
@@ -56,6 +57,8 @@ struct Surface {
     bvhs: Mutex<HashMap<u32, Arc<GridMesh>>>,
     /// Displacement of the diced surface along its limit normal.
     displace: Option<Displacement>,
+    /// Limit texture coordinates, built by the first query.
+    uv: OnceLock<Option<UvSurface>>,
 }
 
 fn options_for(
@@ -142,7 +145,7 @@ fn check_rate(rate: u32) -> PyResult<()> {
 impl Surface {
     /// Reads an OBJ file (with OpenSubdiv tags) and builds the patch table.
     #[new]
-    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false, surface="exact", displace=None))]
+    #[pyo3(signature = (path, scheme="catmark", chaikin=false, boundary=None, max_level=10, smooth_triangles=false, surface="exact", displace=None, fvar=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -154,8 +157,17 @@ impl Surface {
         smooth_triangles: bool,
         surface: &str,
         displace: Option<&str>,
+        fvar: Option<&str>,
     ) -> PyResult<Surface> {
         let displace = displace.map(Displacement::parse).transpose().map_err(py_err)?;
+        let fvar = fvar
+            .map(|f| {
+                FVarMode::from_name(f).ok_or_else(|| {
+                    let names: Vec<&str> = FVarMode::NAMES.iter().map(|(_, n)| *n).collect();
+                    usage(format!("fvar '{f}' is not one of {}", names.join(", ")))
+                })
+            })
+            .transpose()?;
         let scheme = match scheme {
             "catmark" => Scheme::Catmark,
             "loop" => Scheme::Loop,
@@ -171,6 +183,9 @@ impl Surface {
             let mesh = read_obj(Path::new(&path)).map_err(py_err)?;
             let mut options = options_for(&mesh, chaikin, boundary.as_deref(), smooth_triangles)?;
             options.scheme = scheme;
+            if let Some(f) = fvar {
+                options.fvar = f;
+            }
             let table = PatchTable::with_options(
                 &mesh,
                 options,
@@ -190,6 +205,7 @@ impl Surface {
                 max_level,
                 bvhs: Mutex::new(HashMap::new()),
                 displace,
+                uv: OnceLock::new(),
             })
         })
     }
@@ -270,6 +286,56 @@ impl Surface {
             Ok(out)
         })?;
         Ok(matrix(py, n, 9, out))
+    }
+
+    /// Limit texture coordinates at `(face, k, u, v)`: an `N × 6` array of f64 (`s t`, then
+    /// their derivatives in `u` and in `v`); an error for a mesh without texture coordinates.
+    fn uv<'py>(
+        &self,
+        py: Python<'py>,
+        face: PyReadonlyArray1<'py, i64>,
+        k: PyReadonlyArray1<'py, i64>,
+        u: PyReadonlyArray1<'py, f64>,
+        v: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (face, k, u, v) = (face.as_slice()?, k.as_slice()?, u.as_slice()?, v.as_slice()?);
+        let n = face.len();
+        if k.len() != n || u.len() != n || v.len() != n {
+            return Err(usage("face, k, u and v have different lengths".into()));
+        }
+        let uv = match self.uv.get() {
+            Some(s) => s,
+            None => {
+                let mesh = ControlMesh {
+                    options: self.options,
+                    ..self.mesh.clone()
+                };
+                let s = UvSurface::new(&mesh, self.options.fvar).map_err(py_err)?;
+                self.uv.get_or_init(|| s)
+            }
+        };
+        let Some(uv) = uv else {
+            return Err(usage(
+                "the mesh has no texture coordinates (no `vt` in its faces)".into(),
+            ));
+        };
+        let mut out = Vec::with_capacity(6 * n);
+        for i in 0..n {
+            let index = |x: i64| {
+                u32::try_from(x).map_err(|_| usage(format!("sample {i}: invalid index '{x}'")))
+            };
+            let at = FaceCoord::new(index(face[i])?, index(k[i])?, u[i], v[i]);
+            self.table
+                .eval(at)
+                .map_err(|e| usage(format!("sample {i}: {e}")))?;
+            let s = uv
+                .eval(at)
+                .map_err(|e| usage(format!("sample {i}: {e}")))?;
+            out.extend_from_slice(&s.st);
+            out.extend_from_slice(&s.du);
+            out.extend_from_slice(&s.dv);
+        }
+        Ok(matrix(py, n, 6, out))
     }
 
     /// Closest hits of rays on the limit surface diced at `rate`: a dict of arrays (see the

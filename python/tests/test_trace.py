@@ -161,3 +161,42 @@ def test_exact_hits_are_for_the_float64_rays(meshes):
     q32 = (o[ok].astype(np.float32).astype(np.float64)
            + h["t"][ok][:, None] * d[ok].astype(np.float32).astype(np.float64))
     assert np.abs(p - q32).max() > 1e-10
+
+
+@pytest.mark.parametrize("fvar", ["all", "corners-plus1"])
+def test_uv_is_the_cli(cli, tmp_path, fvar):
+    """Surface.uv at the CLI's hits equals the `s t` that `trace --uv` appends, bit for bit;
+    in mode `all` a cube whose faces each carry the unit square gives (s, t) = (u, v)."""
+    text = "".join(f"v {(i & 1) * 2 - 1} {(i >> 1 & 1) * 2 - 1} {(i >> 2 & 1) * 2 - 1}\n"
+                   for i in range(8))
+    text += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+    for f in [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]:
+        text += "f " + " ".join(f"{v + 1}/{j + 1}" for j, v in enumerate(f)) + "\n"
+    path = tmp_path / "cube_uv.obj"
+    path.write_text(text)
+    d = unit_directions(200, seed=11)
+    stdin = "".join(f"0 0 0 {float(x)!r} {float(y)!r} {float(z)!r}\n" for x, y, z in d)
+    r = cli(["trace", path, "--uv", "--fvar", fvar, "--rate", "8"], stdin)
+    assert r.returncode == 0, r.stderr
+    rows = [line.split() for line in r.stdout.splitlines()]
+    assert len(rows) == 200 and all(row[0] == "hit" for row in rows)
+    face = np.array([int(row[2]) for row in rows])
+    k = np.array([int(row[3]) for row in rows])
+    u = np.array([float(row[4]) for row in rows])
+    v = np.array([float(row[5]) for row in rows])
+    st = np.array([[float(row[-2]), float(row[-1])] for row in rows])
+    s = limitray.Surface(path, fvar=fvar)
+    out = s.uv(face, u, v, k=k)
+    assert set(out) == {"st", "du", "dv"} and out["st"].shape == (200, 2)
+    assert np.array_equal(out["st"], st)
+    if fvar == "all":
+        # Bilinear corners (0,0), (1,0), (1,1), (0,1): the interpolation's rounding only.
+        assert np.abs(out["st"] - np.stack([u, v], axis=1)).max() < 1e-15
+
+
+def test_uv_needs_texture_coordinates(meshes):
+    s = limitray.Surface(meshes["cube"])
+    with pytest.raises(ValueError, match="no texture coordinates"):
+        s.uv([0], [0.5], [0.5])
+    with pytest.raises(ValueError, match="fvar 'sometimes'"):
+        limitray.Surface(meshes["cube"], fvar="sometimes")

@@ -5,10 +5,12 @@
 use super::args::{load, DiceArgs, RuleArgs};
 use super::dice::dice_mesh;
 use crate::bvh::{Ray, Ray64};
+use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::{ExactTrace, ExactTracer};
 use crate::grid::GridMesh;
 use crate::mesh::Scheme;
+use crate::patch::uv::UvSurface;
 use crate::patch::{LoopSurface, PatchTable};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
@@ -49,6 +51,10 @@ pub struct TraceCmd {
     /// sharp grazing` with 17 significant digits, `miss`, or `miss graze ERR`.
     #[arg(long)]
     pub exact: bool,
+    /// Append the hit's limit texture coordinates `s t` to every hit line (the mesh's
+    /// face-varying `vt` in the `--fvar` mode; Catmull-Clark meshes with texture coordinates).
+    #[arg(long)]
+    pub uv: bool,
     #[command(flatten)]
     pub backend: BackendArgs,
 }
@@ -57,6 +63,25 @@ pub struct TraceCmd {
 pub fn run(args: &TraceCmd) -> Result<()> {
     let m = load(&args.mesh)?;
     let (input, output) = (std::io::stdin().lock(), std::io::stdout().lock());
+    let uv = if args.uv {
+        let o = args.rules.options(&m);
+        let file = || args.mesh.display().to_string();
+        if m.face_uvs.is_empty() {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "--uv: the mesh has no texture coordinates (no `vt` in its faces)",
+            )
+            .in_file(file()));
+        }
+        let mesh = crate::mesh::ControlMesh {
+            options: o,
+            ..m.clone()
+        };
+        UvSurface::new(&mesh, o.fvar).map_err(|e| e.in_file(file()))?
+    } else {
+        None
+    };
+    let uv = uv.as_ref();
     if args.exact {
         if args.backend.backend == Backend::Gpu {
             return Err(Error::new(
@@ -73,7 +98,13 @@ pub fn run(args: &TraceCmd) -> Result<()> {
         let table =
             PatchTable::with_options(&m, args.rules.options(&m), args.dice.patch_options())?;
         let tracer = ExactTracer::new(std::sync::Arc::new(table), &m)?;
-        return trace_exact(&tracer, input, output);
+        return trace_lines(input, output, true, |rays| {
+            let r64: Vec<Ray64> = rays.iter().map(|r| r.1).collect();
+            with_uv(
+                tracer.trace_batch(&r64).iter().map(exact_line).collect(),
+                uv,
+            )
+        });
     }
     let options = args.rules.options(&m);
     let scheme = options.scheme;
@@ -81,7 +112,15 @@ pub fn run(args: &TraceCmd) -> Result<()> {
     let bvh = GridMesh::build(&d)?;
     drop(d);
     match args.backend.backend {
-        Backend::Cpu => trace_scheme(&bvh, scheme, input, output),
+        Backend::Cpu => trace_with(input, output, |rays| {
+            let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();
+            let lines = bvh
+                .intersect_batch(&f32_rays)
+                .iter()
+                .map(|h| diced_line(h.as_ref(), scheme))
+                .collect();
+            with_uv(lines, uv)
+        }),
         #[cfg(feature = "gpu")]
         Backend::Gpu => {
             let ctx = crate::gpu::GpuContext::new(args.backend.adapter.as_deref())?;
@@ -93,10 +132,12 @@ pub fn run(args: &TraceCmd) -> Result<()> {
                     &f32_rays,
                     crate::gpu::TraceOptions::default(),
                 )?;
-                Ok(hits
-                    .iter()
-                    .map(|h| diced_line(h.as_ref(), scheme))
-                    .collect())
+                with_uv(
+                    hits.iter()
+                        .map(|h| diced_line(h.as_ref(), scheme))
+                        .collect(),
+                    uv,
+                )
             })
         }
         #[cfg(not(feature = "gpu"))]
@@ -147,6 +188,32 @@ fn parse_ray(line: &str, exact: bool) -> std::result::Result<(Ray, Ray64), Strin
         Ray::new([x[0], x[1], x[2]], [x[3], x[4], x[5]]),
         Ray64::new([x64[0], x64[1], x64[2]], [x64[3], x64[4], x64[5]]),
     ))
+}
+
+/// `lines` with, under `--uv`, the limit texture coordinates `s t` of each hit appended (read
+/// back from the line's `face k u v`, which every hit line prints round-trippably).
+fn with_uv(lines: Vec<String>, uv: Option<&UvSurface>) -> Result<Vec<String>> {
+    let Some(uv) = uv else {
+        return Ok(lines);
+    };
+    lines
+        .into_iter()
+        .map(|l| {
+            if !l.starts_with("hit ") {
+                return Ok(l);
+            }
+            let f: Vec<&str> = l.split_whitespace().collect();
+            let num = |i: usize| f[i].parse::<f64>().unwrap_or(f64::NAN);
+            let at = FaceCoord::new(
+                f[2].parse().unwrap_or(u32::MAX),
+                f[3].parse().unwrap_or(u32::MAX),
+                num(4).clamp(0.0, 1.0),
+                num(5).clamp(0.0, 1.0),
+            );
+            let s = uv.eval(at)?;
+            Ok(format!("{l} {:?} {:?}", s.st[0], s.st[1]))
+        })
+        .collect()
 }
 
 /// The output line of a diced hit or miss.

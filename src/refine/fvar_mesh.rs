@@ -105,7 +105,8 @@ fn crease_copies(
                 continue;
             }
             let (a, b) = (point(f, m), point(f, (m + 1) % n));
-            if seen.insert((a.min(b), a.max(b))) {
+            // A degenerate edge (a face repeating a vertex) has no crease tag to carry.
+            if a != b && seen.insert((a.min(b), a.max(b))) {
                 creases.push(EdgeCrease {
                     v0: a.min(b),
                     v1: a.max(b),

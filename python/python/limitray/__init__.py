@@ -61,16 +61,20 @@ class Surface:
     (``"gregory"``), as ``--surface`` does. ``displace`` (``"noise:AMPLITUDE:FREQUENCY"``, as
     ``--displace``) displaces the diced surface of ``dice`` and ``trace`` along its limit
     normal (``eval`` and ``trace(exact=True)`` stay on the limit surface; the latter refuses a
-    displaced surface). Hierarchical edits in the file are honoured everywhere. The mesh
+    displaced surface). ``fvar`` chooses the face-varying interpolation of the texture
+    coordinates (``"none"``, ``"corners-only"``, ``"corners-plus1"`` (default),
+    ``"corners-plus2"``, ``"boundaries"``, ``"all"``, as ``--fvar``), which :meth:`uv`
+    evaluates. Hierarchical edits in the file are honoured everywhere. The mesh
     reader's warnings are issued as Python warnings and kept in ``warnings``.
     """
 
     def __init__(self, path, scheme="catmark", chaikin=False, boundary=None,
                  max_level=DEFAULT_MAX_LEVEL, smooth_triangles=False, surface="exact",
-                 displace=None):
+                 displace=None, fvar=None):
         self._s = _limitray.Surface(str(path), scheme, bool(chaikin), boundary, int(max_level),
                                     bool(smooth_triangles), str(surface),
-                                    None if displace is None else str(displace))
+                                    None if displace is None else str(displace),
+                                    None if fvar is None else str(fvar))
         self.path = str(path)
         for w in self._s.warnings:
             _warnings.warn(w, stacklevel=2)
@@ -109,6 +113,22 @@ class Surface:
         face, k, u, v = (np.ascontiguousarray(a) for a in np.broadcast_arrays(face, k, u, v))
         out = self._s.eval(face, k, u, v)
         return {"p": out[:, 0:3], "du": out[:, 3:6], "dv": out[:, 6:9]}
+
+    def uv(self, face, u, v, k=None):
+        """Limit texture coordinates at ``(face, k, u, v)``, as ``limitray trace --uv`` reports
+        them: the limit of the mesh's face-varying ``vt`` values in the ``fvar`` mode given to
+        the constructor (default ``corners-plus1``). Arguments as in :meth:`eval`. Returns
+        ``{"st", "du", "dv"}``, each float64 (N, 2): the coordinates and their derivatives in
+        the (sub-)face's ``u`` and ``v``. A mesh without texture coordinates raises ValueError.
+        """
+        face = _indices("face", face)
+        n = face.shape[0]
+        k = np.zeros(n, dtype=np.int64) if k is None else _indices("k", k)
+        u = _floats("u", u, np.float64)
+        v = _floats("v", v, np.float64)
+        face, k, u, v = (np.ascontiguousarray(a) for a in np.broadcast_arrays(face, k, u, v))
+        m = self._s.uv(face, k, u, v)
+        return {"st": m[:, 0:2], "du": m[:, 2:4], "dv": m[:, 4:6]}
 
     def trace(self, origins, directions, rate=16, exact=False):
         """Closest hits of rays (``origins``, ``directions``: (N, 3)) on the limit surface
