@@ -849,7 +849,11 @@ fn displace_on_dice_and_trace() {
     for (extra, msg) in [
         (vec!["--exact", "--displace", "noise:0.2:2"], "--displace"),
         (vec!["--displace", "noise:0.2"], "noise:AMPLITUDE:FREQUENCY"),
-        (vec!["--displace", "map:tex.png:1"], "not supported yet"),
+        (
+            vec!["--displace", "map:no-such-tex.png:1"],
+            "no-such-tex.png",
+        ),
+        (vec!["--displace", "map:tex.png"], "map:FILE:SCALE"),
         (vec!["--displace", "noise:0.1:-3"], "frequency"),
     ] {
         let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
@@ -858,6 +862,55 @@ fn displace_on_dice_and_trace() {
         let err = assert_exit_2(&o, &format!("{extra:?}"));
         assert!(err.contains(msg), "{extra:?}: {err}");
     }
+}
+
+/// `--displace map:FILE:SCALE`: a white PNG (value 1, linear) moves every diced vertex of the
+/// cube out by SCALE along its limit normal (1e-6: the f32 positions), and the ray from above
+/// meets the surface SCALE earlier (the top is flat at the centre: 1e-4 for the dicing).
+#[test]
+fn displace_by_an_image_map() {
+    let dir = TempDir::new("displace-map");
+    let mesh = dir.file("cube.obj", CUBE);
+    let png = dir.path("white.png");
+    limitray::io::png::write_rgb8(&png, 16, 16, vec![255; 16 * 16 * 3]).unwrap();
+    let spec = format!("map:{}:0.1", png.display());
+    let plain = refine_points(&refine_to_file_cmd(
+        &dir,
+        "dice",
+        &mesh,
+        "a.obj",
+        &["--rate", "6"],
+    ));
+    let moved = refine_points(&refine_to_file_cmd(
+        &dir,
+        "dice",
+        &mesh,
+        "b.obj",
+        &["--rate", "6", "--displace", &spec],
+    ));
+    assert_eq!(plain.len(), moved.len());
+    for (a, b) in plain.iter().zip(&moved) {
+        let d = common::dist(a, b);
+        assert!((d - 0.1).abs() < 1e-6, "{a:?} -> {b:?}: {d}");
+    }
+    let ray = b"0 0 5 0 0 -1\n";
+    let hit = |extra: &[&str]| -> f64 {
+        let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        let o = common::run_limitray(&args, Some(ray));
+        assert_success(&o, "trace");
+        stdout(&o)
+            .split_whitespace()
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let (t0, t1) = (
+        hit(&["--rate", "16"]),
+        hit(&["--rate", "16", "--displace", &spec]),
+    );
+    assert!((t0 - t1 - 0.1).abs() < 1e-4, "{t0} {t1}");
 }
 
 fn refine_to_file_cmd(

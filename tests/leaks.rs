@@ -438,34 +438,71 @@ fn displaced_surfaces_do_not_leak() {
             continue;
         }
         let diag = mesh.diagonal();
-        let displace = limitray::dice::Displacement::Noise {
+        let noise = limitray::dice::Displacement::Noise {
             amplitude: 0.04 * diag,
             frequency: 6.0 / diag,
         };
-        for rate in RATES {
-            let estimate = 2 * (rate as usize).pow(2) * mesh.face_verts.len() / 4;
-            if estimate > MAX_TRIANGLES {
-                continue;
+        // An image map: 64 × 48 texels of noise in [0, 1], addressed by each face's own (u, v)
+        // (the mesh has no texture coordinates: the heights jump across every edge) and by
+        // texture coordinates with seams (the vertices' x, y with islands of their own).
+        let texels: Vec<[f32; 3]> = (0..64 * 48)
+            .map(|i| {
+                let (x, y) = ((i % 64) as f64 * 0.37, (i / 64) as f64 * 0.41);
+                [(0.5 + 0.5 * limitray::texture::noise::noise([x, y, 0.5]).0) as f32; 3]
+            })
+            .collect();
+        let map = limitray::dice::Displacement::Map {
+            texture: std::sync::Arc::new(limitray::texture::image::ImageTexture::from_rgb(
+                64, 48, texels,
+            )),
+            scale: 0.04 * diag,
+            file: "noise.png".into(),
+        };
+        let mut with_uvs = mesh.clone();
+        with_uvs.uvs = mesh
+            .positions
+            .iter()
+            .map(|p| [p[0] / diag, p[1] / diag])
+            .collect();
+        with_uvs.face_uvs = mesh.face_verts.clone();
+        for f in (0..mesh.num_faces()).step_by(3) {
+            for c in mesh.face_offsets[f] as usize..mesh.face_offsets[f + 1] as usize {
+                let v = with_uvs.face_uvs[c] as usize;
+                with_uvs.uvs.push(with_uvs.uvs[v].map(|x| x + 0.3));
+                with_uvs.face_uvs[c] = (with_uvs.uvs.len() - 1) as u32;
             }
-            for by in [[0.0; 3], FAR] {
-                let m = translated(&mesh, by);
-                let table = PatchTable::new(&m, PatchOptions::default()).unwrap();
-                let d = dice(
-                    &table,
-                    &m,
-                    &DiceOptions {
-                        rate: DiceRate::Uniform(rate),
-                        max_rate: 256,
-                        displace: Some(displace),
-                    },
-                )
-                .unwrap();
-                let grid = GridMesh::build(&d).unwrap();
-                let built = Built { diced: d, grid };
-                let label = format!("{name} (displaced) rate {rate} at {by:?}");
-                cases += (probe(&label, &built, diag, 50_000) > 0) as usize;
+        }
+        let variants = [
+            ("noise", &mesh, &noise, 50_000),
+            ("face-uv map", &mesh, &map, 20_000),
+            ("seamed-uv map", &with_uvs, &map, 20_000),
+        ];
+        for (what, mesh, displace, rays) in variants {
+            for rate in RATES {
+                let estimate = 2 * (rate as usize).pow(2) * mesh.face_verts.len() / 4;
+                if estimate > MAX_TRIANGLES {
+                    continue;
+                }
+                for by in [[0.0; 3], FAR] {
+                    let m = translated(mesh, by);
+                    let table = PatchTable::new(&m, PatchOptions::default()).unwrap();
+                    let d = dice(
+                        &table,
+                        &m,
+                        &DiceOptions {
+                            rate: DiceRate::Uniform(rate),
+                            max_rate: 256,
+                            displace: Some(displace.clone()),
+                        },
+                    )
+                    .unwrap();
+                    let grid = GridMesh::build(&d).unwrap();
+                    let built = Built { diced: d, grid };
+                    let label = format!("{name} ({what}) rate {rate} at {by:?}");
+                    cases += (probe(&label, &built, diag, rays) > 0) as usize;
+                }
             }
         }
     }
-    assert!(cases >= 70 || !selected(""), "only {cases} cases");
+    assert!(cases >= 210 || !selected(""), "only {cases} cases");
 }

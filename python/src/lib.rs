@@ -129,7 +129,7 @@ impl Surface {
         DiceOptions {
             rate: DiceRate::Uniform(rate),
             max_rate: MAX_RATE,
-            displace: self.displace,
+            displace: self.displace.clone(),
         }
     }
 }

@@ -231,7 +231,7 @@ impl DiceArgs {
                 None => DiceRate::Uniform(self.rate),
             },
             max_rate: self.max_rate,
-            displace: self.displace,
+            displace: self.displace.clone(),
         }
     }
 }

@@ -150,9 +150,9 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
             m.surface = s;
         }
     }
-    if let Some(d) = args.displace {
+    if let Some(d) = &args.displace {
         for m in &mut desc.meshes {
-            m.displace = Some(d);
+            m.displace = Some(d.clone());
         }
     }
     let mut settings = desc.render;

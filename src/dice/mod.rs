@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Options of [`dice`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct DiceOptions {
     /// How many segments each edge gets.
     pub rate: DiceRate,
@@ -135,12 +135,51 @@ struct Point {
     param: FaceCoord,
 }
 
+/// A displacement with what its lookups need: the mesh's limit texture coordinates for an
+/// image map (none on a mesh without them: the (sub-)face's own `(u, v)` address the image).
+struct Displacer<'a> {
+    d: &'a Displacement,
+    uv: Option<crate::patch::uv::UvSurface>,
+}
+
+impl<'a> Displacer<'a> {
+    fn new(d: &'a Displacement, table: &PatchTable, mesh: &ControlMesh) -> Result<Self> {
+        let uv = if d.uses_uv() && !mesh.face_uvs.is_empty() {
+            let m = ControlMesh {
+                options: table.mesh_options,
+                ..mesh.clone()
+            };
+            crate::patch::uv::UvSurface::new(&m, table.mesh_options.fvar)?
+        } else {
+            None
+        };
+        Ok(Displacer { d, uv })
+    }
+
+    fn apply(
+        &self,
+        s: &crate::patch::Sample,
+        n: [f64; 3],
+        at: FaceCoord,
+    ) -> Result<([f64; 3], [f64; 3])> {
+        let st = if !self.d.uses_uv() {
+            None
+        } else if let Some(uv) = &self.uv {
+            let x = uv.eval(at)?;
+            Some((x.st, x.du, x.dv))
+        } else {
+            Some(([at.u, at.v], [1.0, 0.0], [0.0, 1.0]))
+        };
+        Ok(self.d.apply_at(s, n, st))
+    }
+}
+
 /// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
 /// vanishes (corners of boundary faces, crease ends), the normal is taken a little inside the
 /// domain.
 fn eval_point(
     table: &PatchTable,
-    displace: Option<&Displacement>,
+    displace: Option<&Displacer>,
     face: u32,
     k: u32,
     u: f64,
@@ -161,7 +200,7 @@ fn eval_point(
         [0.0, 0.0, 1.0]
     };
     let (p, n) = match displace {
-        Some(d) => d.apply(&s, n),
+        Some(d) => d.apply(&s, n, FaceCoord::new(face, k, u, v))?,
         None => (s.p, n),
     };
     if !crate::numeric::in_range(p) {
@@ -231,6 +270,11 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     let topo = &level.topo;
     let live = |f: usize| !level.face_hole[f];
     let rates = edge_rates(table, &level, opts)?;
+    let displacer = opts
+        .displace
+        .as_ref()
+        .map(|d| Displacer::new(d, table, mesh))
+        .transpose()?;
     crate::memory::check(
         "dicing",
         estimate::estimate(&level, &rates).bytes(),
@@ -309,7 +353,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     }
     let points: Vec<Point> = jobs
         .par_iter()
-        .map(|&(f, k, u, v)| eval_point(table, opts.displace.as_ref(), f, k, u, v))
+        .map(|&(f, k, u, v)| eval_point(table, displacer.as_ref(), f, k, u, v))
         .collect::<Result<_>>()?;
     let shared = Shared {
         points,
@@ -335,7 +379,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
         shared: &shared,
         sharp_edge: &sharp_edge,
         sharp_vertex: &sharp_vertex,
-        displace: opts.displace.as_ref(),
+        displace: displacer.as_ref(),
     };
     let parts: Vec<DomainOut> = domains
         .par_chunks(64)
@@ -416,7 +460,7 @@ struct DomainCtx<'a> {
     shared: &'a Shared,
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
-    displace: Option<&'a Displacement>,
+    displace: Option<&'a Displacer<'a>>,
 }
 
 /// A point on a domain's side: its shared index, and whether it lies on a seam.

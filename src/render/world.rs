@@ -80,8 +80,8 @@ fn index_of<T: PartialEq>(list: &mut Vec<T>, x: T) -> usize {
 /// What makes two dicings of one patch table the same: the options, compared by their bits
 /// (a screen-space rate includes the eye in object space, so only instances with the same
 /// transform share it).
-#[derive(Clone, Copy, PartialEq, Eq)]
-struct DiceKey([u64; 8]);
+#[derive(Clone, PartialEq, Eq)]
+struct DiceKey([u64; 6], Option<String>);
 
 impl DiceKey {
     fn of(o: &DiceOptions) -> DiceKey {
@@ -98,14 +98,7 @@ impl DiceKey {
                 s.pixels_per_edge.to_bits(),
             ],
         };
-        let (g, h) = match o.displace {
-            None => (0, 0),
-            Some(crate::dice::Displacement::Noise {
-                amplitude,
-                frequency,
-            }) => (amplitude.to_bits(), frequency.to_bits() | 1 << 63),
-        };
-        DiceKey([a, b, c, d, e, f, g, h])
+        DiceKey([a, b, c, d, e, f], o.displace.as_ref().map(|d| d.key()))
     }
 }
 
@@ -313,7 +306,7 @@ impl World {
                 DiceOptions {
                     rate,
                     max_rate: m.max_rate,
-                    displace: m.displace,
+                    displace: m.displace.clone(),
                 }
             })
             .collect();

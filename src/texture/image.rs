@@ -493,6 +493,16 @@ impl ImageTexture {
         ]
     }
 
+    /// The largest channel value in magnitude (of the file's own texels, level 0): what
+    /// bounds a displacement read from the image.
+    pub fn max_abs(&self) -> f32 {
+        self.levels[0]
+            .texels
+            .iter()
+            .flatten()
+            .fold(0.0f32, |m, x| m.max(x.abs()))
+    }
+
     /// The mean of the three channels of [`ImageTexture::lookup`] (a grey image gives its
     /// grey value), for displacement and roughness maps.
     pub fn lookup_scalar(&self, st: [f32; 2], footprint: f32) -> f32 {

@@ -380,7 +380,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
         let displace = match &r.displace {
             None => None,
             Some(s) => Some(
-                crate::dice::Displacement::parse(s.get_ref())
+                crate::dice::Displacement::parse_in(s.get_ref(), &base)
                     .map_err(|e: Error| src.err(s.span(), e.message))?,
             ),
         };
