@@ -156,6 +156,8 @@ impl Displacement {
     /// Height at the limit sample `s` and its derivatives along `u` and `v`; `st` is the
     /// point's texture frame (needed by maps, ignored by noise).
     pub fn height_at(&self, s: &Sample, st: Option<StFrame>) -> (f64, f64, f64) {
+        #[cfg(not(feature = "render"))]
+        let _ = st;
         match self {
             Displacement::Noise { .. } => {
                 let (h, g) = self.height(s.p);
