@@ -11,7 +11,9 @@
 //!   `t edgeedit`) for the detail scene;
 //! - `meshes/gear8_tri.obj`, `meshes/rounded_box_s2_tri.obj`: the 8-tooth gear and the
 //!   sharpness-2 box cut into triangles (creases kept), for the Loop scene;
-//! - `studio.exr`: a 256×128 lat-long studio environment (dim gradient, two soft boxes).
+//! - `studio.exr`: a 256×128 lat-long studio environment (dim gradient, two soft boxes);
+//! - `textures/box_atlas.png`: a 384×256 sRGB atlas of six coloured, checkered tiles, one per
+//!   face of the edited box (whose texture coordinates `shapes::atlas_uvs` lays out).
 
 use limitray::mesh::shapes;
 use std::io::Write;
@@ -114,7 +116,8 @@ fn main() {
         "edited_box.obj",
         &shapes::edited_box(),
         "Rounded box, sharpness 2, with hierarchical edits: a plateau with a sharp rim and a \
-         dimple at levels 2-3, a bump with a sharp corner at levels 1-2.",
+         dimple at levels 2-3, a bump with a sharp corner at levels 1-2; texture coordinates: \
+         one tile of a 3 x 2 atlas per face.",
     );
     write(
         &meshes,
@@ -136,4 +139,44 @@ fn main() {
     let path = dir.join("studio.exr");
     limitray::io::exr::write_planes(&path, w, h, planes).unwrap();
     println!("wrote {}", path.display());
+    let textures = dir.join("textures");
+    std::fs::create_dir_all(&textures).unwrap();
+    let path = textures.join("box_atlas.png");
+    let (w, h) = (384u32, 256u32);
+    limitray::io::png::write_rgb8(&path, w, h, atlas(w, h)).unwrap();
+    println!("wrote {}", path.display());
+}
+
+/// The box's texture atlas: 3 × 2 tiles (the bottom row of the image is `t = 0`), each a hue of
+/// its own with an 8 × 8 checker of light and dark squares and a dark frame (8-bit sRGB).
+fn atlas(width: u32, height: u32) -> Vec<u8> {
+    let hues: [[f32; 3]; 6] = [
+        [0.85, 0.32, 0.25],
+        [0.90, 0.70, 0.25],
+        [0.35, 0.70, 0.35],
+        [0.25, 0.55, 0.85],
+        [0.55, 0.35, 0.80],
+        [0.85, 0.85, 0.80],
+    ];
+    let mut rgb = Vec::with_capacity((width * height * 3) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let s = (x as f32 + 0.5) / width as f32;
+            let t = 1.0 - (y as f32 + 0.5) / height as f32;
+            let (c, r) = ((s * 3.0) as usize, (t * 2.0) as usize);
+            let (fs, ft) = (s * 3.0 - c as f32, t * 2.0 - r as f32);
+            let hue = hues[(r * 3 + c).min(5)];
+            let frame = !(0.06..=0.94).contains(&fs) || !(0.06..=0.94).contains(&ft);
+            let checker = ((fs * 8.0) as u32 + (ft * 8.0) as u32).is_multiple_of(2);
+            let k = if frame {
+                0.15
+            } else if checker {
+                1.0
+            } else {
+                0.6
+            };
+            rgb.extend(hue.iter().map(|&h| (h * k * 255.0).round() as u8));
+        }
+    }
+    rgb
 }

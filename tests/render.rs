@@ -559,3 +559,107 @@ fn readme_scene_example_parses() {
     assert_eq!(desc.quads.len(), 1);
     assert!(desc.meshes[0].file.ends_with("scenes/meshes/blob.obj"));
 }
+
+/// Texture maps in the furnace (environment radiance 1, a convex box: one bounce): an albedo
+/// map of constant sRGB 128 renders its linear value 0.2158605 within 1% — addressed by the
+/// faces' own (u, v) (the mesh has no texture coordinates) and by texture coordinates of a
+/// 3 × 2 atlas (edited box, face-varying) — and a procedural `noise:F` map renders its mean
+/// over the object, within [0.3, 0.7]; a conductor's roughness map of constant 128/255 (linear
+/// data) renders as `roughness = 128/255` (0.1%: the map's channel mean may round differently).
+#[test]
+fn texture_maps_in_the_furnace() {
+    let dir = TempDir::new("furnace-maps");
+    limitray::io::png::write_rgb8(&dir.path("grey.png"), 8, 8, vec![128; 8 * 8 * 3]).unwrap();
+    let atlas = dir.path("atlas.obj");
+    {
+        let mut f = std::fs::File::create(&atlas).unwrap();
+        limitray::mesh::shapes::write_tagged_obj(
+            &mut f,
+            &limitray::mesh::shapes::edited_box(),
+            "edited box",
+        )
+        .unwrap();
+    }
+    let grey = 0.21586050011389926f64;
+    for (mesh, map, lo, hi) in [
+        ("rounded_box_s0.obj", "grey.png", grey * 0.99, grey * 1.01),
+        (
+            atlas.to_str().unwrap(),
+            "grey.png",
+            grey * 0.99,
+            grey * 1.01,
+        ),
+        ("rounded_box_s0.obj", "noise:2", 0.3, 0.7),
+    ] {
+        let map_value = if map.starts_with("noise") {
+            map.to_string()
+        } else {
+            dir.path(map).display().to_string()
+        };
+        let scene = furnace(1.0, 16, "radiance = 1.0", mesh).replace(
+            "albedo = 1\n",
+            &format!("albedo = 1\nalbedo_map = \"{map_value}\"\n"),
+        );
+        assert!(scene.contains("albedo_map"), "{scene}");
+        let w = world(&scene, &dir.0);
+        let f = render_one_thread(&w);
+        let (obj, bg, n) = means(&f);
+        eprintln!("furnace {mesh} {map}: object mean {obj:.5} over {n} pixels");
+        assert!(n > 500 && obj >= lo && obj <= hi, "{mesh} {map}: {obj}");
+        assert_eq!(bg, 1.0);
+    }
+    // A roughness map of constant 128/255 (linear data) renders as `roughness = 128/255`.
+    let rough = |key: String| {
+        let scene = furnace(1.0, 16, "radiance = 1.0", "rounded_box_s0.obj").replace(
+            "type = \"diffuse\"\nalbedo = 1\n",
+            &format!("type = \"conductor\"\nbase_color = 1.0\n{key}\n"),
+        );
+        assert!(scene.contains("rough"), "{scene}");
+        means(&render_one_thread(&world(&scene, &dir.0))).0
+    };
+    let mapped = rough(format!(
+        "roughness_map = \"{}\"",
+        dir.path("grey.png").display()
+    ));
+    let scalar = rough(format!("roughness = {}", 128.0f32 / 255.0));
+    assert!(
+        (mapped - scalar).abs() < 1e-3 * scalar,
+        "roughness map {mapped} vs scalar {scalar}"
+    );
+}
+
+/// Texture map mistakes name the scene, the line and the key: a map on a material type that
+/// does not take it, a missing image (the message also names the file), a bad noise frequency.
+#[test]
+fn texture_map_errors_name_the_key() {
+    let dir = TempDir::new("map-errors");
+    let base = furnace(1.0, 4, "radiance = 1.0", "rounded_box_s0.obj");
+    let cases = [
+        (
+            base.replace("albedo = 1\n", "albedo = 1\nroughness_map = \"noise:2\"\n"),
+            "'roughness_map' does not apply to a diffuse material",
+        ),
+        (
+            base.replace("albedo = 1\n", "albedo = 1\nalbedo_map = \"nowhere.png\"\n"),
+            "nowhere.png",
+        ),
+        (
+            base.replace("albedo = 1\n", "albedo = 1\nalbedo_map = \"noise:-1\"\n"),
+            "frequency -1",
+        ),
+    ];
+    for (text, want) in cases {
+        let path = dir.path("scene.toml");
+        let line = text
+            .lines()
+            .position(|l| l.contains("_map"))
+            .map(|i| i + 1)
+            .unwrap();
+        let err = parse_scene(&text, &path)
+            .and_then(|desc| World::build(&desc, desc.render).map(|_| ()))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(want), "{err}");
+        assert!(err.contains(&format!(":{line}")), "line {line}: {err}");
+    }
+}

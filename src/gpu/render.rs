@@ -96,6 +96,16 @@ fn push_dist2(w: &mut Vec<u32>, d: &Distribution2D) -> Result<u32> {
 /// environment, shading normals, instance transforms); returns the words and the block's
 /// offset.
 pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
+    if let Some(i) = world.instance_maps.iter().position(Option::is_some) {
+        return Err(Error::new(
+            ErrorKind::Gpu,
+            format!(
+                "instance {i}'s material has texture maps (albedo_map, roughness_map or \
+                 emission_map), which the GPU path tracer does not read yet: render the scene \
+                 on the CPU (displacement maps are fine: they are applied at dicing)"
+            ),
+        ));
+    }
     let mut packed = PackedScene::from_scene(&world.scene)?;
     let w = &mut packed.words;
     let r = here(w)? as usize;

@@ -371,17 +371,44 @@ pub fn edited_box() -> ControlMesh {
             value: 10.0,
         },
     ));
+    atlas_uvs(&mut m);
     m
 }
 
+/// Gives each face of a six-quad box its own tile of a 3 × 2 texture atlas (face `i` in column
+/// `i % 3`, row `i / 3`, inset by 1/32 of a tile so that filtering stays inside it): texture
+/// coordinates with a seam along every edge of the box.
+pub fn atlas_uvs(m: &mut ControlMesh) {
+    m.uvs.clear();
+    m.face_uvs.clear();
+    for f in 0..m.num_faces() {
+        let (c, r) = ((f % 3) as f64, ((f / 3) % 2) as f64);
+        let inset = 1.0 / 32.0;
+        let corners = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        for k in 0..m.face_size(f) {
+            let [x, y] = corners[k % 4];
+            let x = inset + x * (1.0 - 2.0 * inset);
+            let y = inset + y * (1.0 - 2.0 * inset);
+            m.uvs.push([(c + x) / 3.0, (r + y) / 2.0]);
+            m.face_uvs.push((m.uvs.len() - 1) as u32);
+        }
+    }
+}
+
 /// Writes a control mesh as OBJ with OpenSubdiv tags (`t crease 2/1 a b s`,
-/// `t corner 1/1 v s`, `t hole 1/0 f`), positions in shortest round-trip form, `header`
+/// `t corner 1/1 v s`, `t hole 1/0 f`, edits), positions and texture coordinates (`vt`, faces
+/// `f v/vt`) in shortest round-trip form, `header`
 /// lines as comments first.
 pub fn write_tagged_obj(w: &mut impl Write, m: &ControlMesh, header: &str) -> std::io::Result<()> {
     let mut o = super::obj::ObjWriter::new(w);
     o.comment(header)?;
     o.vertices("v", &m.positions)?;
-    o.faces(&m.face_offsets, &m.face_verts, false)?;
+    if m.face_uvs.is_empty() {
+        o.faces(&m.face_offsets, &m.face_verts, false)?;
+    } else {
+        o.vertices("vt", &m.uvs)?;
+        o.faces_with_uvs(&m.face_offsets, &m.face_verts, &m.face_uvs)?;
+    }
     o.tags(m)
 }
 
@@ -398,6 +425,8 @@ mod tests {
         assert_eq!(back.face_verts, m.face_verts);
         assert_eq!(back.creases, m.creases);
         assert_eq!(back.edits, m.edits);
+        assert_eq!(back.uvs, m.uvs);
+        assert_eq!(back.face_uvs, m.face_uvs);
     }
 
     #[test]

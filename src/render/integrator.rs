@@ -148,6 +148,8 @@ impl World {
         // (the camera ray counts as delta: no light sampling competes with it).
         let mut prev_pdf = 0.0f32;
         let mut prev_delta = true;
+        // The path's footprint cone (texture filtering): width at the ray's origin and spread.
+        let (mut cone_width, mut cone_spread) = (0.0f32, 1.0 / self.camera.pixels_per_radian());
         for bounce in 0..=max_depth {
             let Some(hit) = self.closest(o, d) else {
                 if let Some(env) = &self.lights.env {
@@ -180,7 +182,17 @@ impl World {
                 }
                 Closest::Mesh(h) => h,
             };
-            let mat = &self.materials[self.instance_material[h.instance as usize] as usize];
+            let mi = self.instance_material[h.instance as usize] as usize;
+            let width = cone_width + cone_spread * h.hit.t * d.length();
+            let textured;
+            let mat = match &self.instance_maps[h.instance as usize] {
+                Some(maps) => {
+                    let at = maps.lookup(&h.hit, self.hit_point(&h), width);
+                    textured = self.textures[mi].apply(self.materials[mi], &at);
+                    &textured
+                }
+                None => &self.materials[mi],
+            };
             let wo = -d;
             if let Material::Emissive { radiance } = *mat {
                 if bounce == 0 {
@@ -278,6 +290,10 @@ impl World {
             }
             prev_pdf = bs.pdf;
             prev_delta = bs.delta;
+            cone_width = width;
+            if !bs.delta {
+                cone_spread += super::texturing::BOUNCE_SPREAD;
+            }
             o = offset_origin(s.p, side(s.ng, wi));
             d = wi;
         }

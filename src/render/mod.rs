@@ -12,6 +12,7 @@ pub mod output;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+pub mod texturing;
 pub mod world;
 
 pub use film::Film;

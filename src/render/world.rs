@@ -7,12 +7,14 @@ use super::env::{EnvMap, Environment};
 use super::light::{Lights, MeshLight};
 use super::material::Material;
 use super::scene::{Dicing, EnvDesc, MeshDesc, RenderSettings, SceneDesc};
+use super::texturing::{InstanceMaps, MaterialTextures};
 use crate::bvh::SceneBvh;
 use crate::dice::{dice, DiceOptions, DiceRate, ScreenRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridMesh;
 use crate::mesh::obj::read_obj;
 use crate::mesh::ControlMesh;
+use crate::patch::uv::UvSurface;
 use crate::patch::{PatchOptions, PatchTable};
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
@@ -53,6 +55,10 @@ pub struct World {
     pub instance_material: Vec<u32>,
     /// Materials.
     pub materials: Vec<Material>,
+    /// Texture maps of each material (parallel to `materials`).
+    pub textures: Vec<MaterialTextures>,
+    /// What each instance's maps are addressed by (`None` when its material has none).
+    pub instance_maps: Vec<Option<Arc<InstanceMaps>>>,
     /// Lights.
     pub lights: Lights,
     /// Camera.
@@ -251,6 +257,11 @@ impl World {
                 })
             }
         };
+        let textures = desc
+            .material_maps
+            .iter()
+            .map(|m| MaterialTextures::open(m, &scene_name))
+            .collect::<Result<Vec<_>>>()?;
         stats.load_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
@@ -259,21 +270,28 @@ impl World {
             usize,
             crate::mesh::Scheme,
             crate::patch::approx::Approximation,
+            crate::mesh::FVarMode,
         );
         let mut table_keys: Vec<TableKey> = Vec::new();
         let table_of: Vec<usize> = desc
             .meshes
             .iter()
             .zip(&file_of)
-            .map(|(m, &f)| index_of(&mut table_keys, (f, m.max_level, m.scheme, m.surface)))
+            .map(|(m, &f)| {
+                index_of(
+                    &mut table_keys,
+                    (f, m.max_level, m.scheme, m.surface, m.fvar),
+                )
+            })
             .collect();
         let tables = table_keys
             .par_iter()
-            .map(|&(f, max_level, scheme, surface)| {
+            .map(|&(f, max_level, scheme, surface, fvar)| {
                 PatchTable::with_options(
                     &controls[f],
                     crate::mesh::Options {
                         scheme,
+                        fvar,
                         ..controls[f].options
                     },
                     PatchOptions {
@@ -283,7 +301,25 @@ impl World {
                     },
                 )
             })
+            .map(|t| t.map(Arc::new))
             .collect::<Result<Vec<_>>>()?;
+        // Texture coordinates of the tables whose instances' maps read them.
+        let mut uv_of_table: Vec<Option<Arc<UvSurface>>> = vec![None; tables.len()];
+        for (i, m) in desc.meshes.iter().enumerate() {
+            let (ti, f) = (table_of[i], file_of[i]);
+            if textures[m.material].uses_uv()
+                && uv_of_table[ti].is_none()
+                && !controls[f].face_uvs.is_empty()
+            {
+                let mesh = ControlMesh {
+                    options: tables[ti].mesh_options,
+                    ..controls[f].clone()
+                };
+                uv_of_table[ti] = UvSurface::new(&mesh, m.fvar)
+                    .map_err(|e| e.in_file(m.file.display().to_string()))?
+                    .map(Arc::new);
+            }
+        }
         stats.patch_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
@@ -339,7 +375,6 @@ impl World {
                     .map_err(|e| e.in_file(m.file.display().to_string()))
             })
             .collect::<Result<Vec<_>>>()?;
-        drop(tables);
         drop(controls);
         stats.dice_s = t0.elapsed().as_secs_f64();
 
@@ -365,9 +400,10 @@ impl World {
         let mut scene = SceneBvh::new();
         let mut transforms = Vec::new();
         let mut instance_material = Vec::new();
+        let mut instance_maps = Vec::new();
         let mut mesh_lights = Vec::new();
         let mut mesh_id: Vec<Option<u32>> = vec![None; job_grids.len()];
-        for ((m, grid), &job) in desc.meshes.iter().zip(&grids).zip(&job_of) {
+        for (i, ((m, grid), &job)) in desc.meshes.iter().zip(&grids).zip(&job_of).enumerate() {
             if grid.triangles == 0 {
                 warnings.push(format!(
                     "{}:{}: mesh {} has no surface (every face a hole?); skipped",
@@ -390,8 +426,24 @@ impl World {
             let inst = scene.add_instance(id, m.transform);
             transforms.push(m.transform);
             instance_material.push(m.material as u32);
+            let maps = &textures[m.material];
+            instance_maps.push((!maps.is_empty()).then(|| {
+                Arc::new(InstanceMaps {
+                    table: tables[table_of[i]].clone(),
+                    uv: uv_of_table[table_of[i]].clone(),
+                    to_world: m.transform,
+                    to_object: m.transform.inverse(),
+                })
+            }));
             let mat = desc.materials[m.material].1;
-            if let (Some(radiance), Some(tris)) = (emitted(mat), &light_tris[job]) {
+            // A textured emitter is not sampled as a light (its radiance varies over it): paths
+            // find it by BSDF sampling alone, which stays unbiased.
+            let lit = if maps.emission.is_some() {
+                None
+            } else {
+                emitted(mat)
+            };
+            if let (Some(radiance), Some(tris)) = (lit, &light_tris[job]) {
                 let tris = tris
                     .iter()
                     .map(|t| t.map(|p| m.transform.transform_point3(Vec3::from(p))))
@@ -416,6 +468,8 @@ impl World {
             transforms,
             instance_material,
             materials: desc.materials.iter().map(|(_, m)| *m).collect(),
+            textures,
+            instance_maps,
             lights,
             camera,
             settings,

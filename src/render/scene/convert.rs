@@ -75,7 +75,7 @@ pub(super) fn material(src: &Src, m: &Spanned<RawMaterial>) -> Result<Material> 
     let r = m.get_ref();
     let kind = r.kind.get_ref().as_str();
     // Which keys each type accepts.
-    let present: [(&str, Option<Range<usize>>); 8] = [
+    let present: [(&str, Option<Range<usize>>); 11] = [
         ("albedo", r.albedo.as_ref().map(|v| v.span())),
         ("eta", r.eta.as_ref().map(|v| v.span())),
         ("k", r.k.as_ref().map(|v| v.span())),
@@ -84,12 +84,22 @@ pub(super) fn material(src: &Src, m: &Spanned<RawMaterial>) -> Result<Material> 
         ("roughness", r.roughness.as_ref().map(|v| v.span())),
         ("ior", r.ior.as_ref().map(|v| v.span())),
         ("radiance", r.radiance.as_ref().map(|v| v.span())),
+        ("albedo_map", r.albedo_map.as_ref().map(|v| v.span())),
+        ("roughness_map", r.roughness_map.as_ref().map(|v| v.span())),
+        ("emission_map", r.emission_map.as_ref().map(|v| v.span())),
     ];
     let allowed: &[&str] = match kind {
-        "diffuse" => &["albedo"],
-        "conductor" => &["eta", "k", "base_color", "preset", "roughness"],
-        "dielectric" => &["ior", "roughness"],
-        "emissive" => &["radiance"],
+        "diffuse" => &["albedo", "albedo_map"],
+        "conductor" => &[
+            "eta",
+            "k",
+            "base_color",
+            "preset",
+            "roughness",
+            "roughness_map",
+        ],
+        "dielectric" => &["ior", "roughness", "roughness_map"],
+        "emissive" => &["radiance", "emission_map"],
         _ => {
             return Err(src.err(
                 r.kind.span(),
@@ -181,6 +191,34 @@ pub(super) fn material(src: &Src, m: &Spanned<RawMaterial>) -> Result<Material> 
                 None => return Err(src.err(m.span(), "an emissive material needs radiance")),
             },
         },
+    })
+}
+
+/// The texture maps of a material entry (`albedo_map`, `roughness_map`, `emission_map`), each
+/// `noise:FREQUENCY` or an image file relative to the scene's folder; which keys a type takes is
+/// checked by [`material`].
+pub(super) fn material_maps(
+    src: &Src,
+    m: &Spanned<RawMaterial>,
+    base: &std::path::Path,
+) -> Result<super::MaterialMaps> {
+    let r = m.get_ref();
+    let spec = |v: &Option<Spanned<String>>| -> Result<Option<super::MapDesc>> {
+        v.as_ref()
+            .map(|s| {
+                crate::texture::TextureSpec::parse(s.get_ref(), base)
+                    .map(|spec| super::MapDesc {
+                        spec,
+                        line: src.line_of(s.span().start),
+                    })
+                    .map_err(|e| src.err(s.span(), e.message))
+            })
+            .transpose()
+    };
+    Ok(super::MaterialMaps {
+        albedo: spec(&r.albedo_map)?,
+        roughness: spec(&r.roughness_map)?,
+        emission: spec(&r.emission_map)?,
     })
 }
 

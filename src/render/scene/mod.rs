@@ -115,6 +115,26 @@ pub struct MeshDesc {
     pub line: usize,
 }
 
+/// A texture map of a material: what it names and the scene line, for messages.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapDesc {
+    /// `noise:FREQUENCY` or an image file (resolved against the scene file's folder).
+    pub spec: crate::texture::TextureSpec,
+    /// Line of the key in the scene file.
+    pub line: usize,
+}
+
+/// The texture maps of a material (`albedo_map`, `roughness_map`, `emission_map`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialMaps {
+    /// Multiplies a diffuse material's albedo (colour: sRGB images).
+    pub albedo: Option<MapDesc>,
+    /// Replaces a conductor's or dielectric's roughness (data: linear images, channel mean).
+    pub roughness: Option<MapDesc>,
+    /// Multiplies an emissive material's radiance (colour: sRGB images).
+    pub emission: Option<MapDesc>,
+}
+
 /// The environment (`[environment]`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum EnvDesc {
@@ -144,6 +164,8 @@ pub struct SceneDesc {
     pub camera: CameraDesc,
     /// Materials by name, sorted by name.
     pub materials: Vec<(String, Material)>,
+    /// The texture maps of each material (parallel to `materials`).
+    pub material_maps: Vec<MaterialMaps>,
     /// Meshes.
     pub meshes: Vec<MeshDesc>,
     /// Quad area lights.
@@ -275,8 +297,10 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
 
     // [materials.*]
     let mut materials = Vec::new();
+    let mut material_maps = Vec::new();
     for (name, m) in &raw.materials {
         materials.push((name.clone(), material(&src, m)?));
+        material_maps.push(convert::material_maps(&src, m, &base)?);
     }
 
     // [[mesh]]
@@ -474,6 +498,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc> {
         render,
         camera,
         materials,
+        material_maps,
         meshes,
         quads,
         environment,

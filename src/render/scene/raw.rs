@@ -109,6 +109,9 @@ pub(super) struct RawMaterial {
     pub(super) roughness: Option<Spanned<f32>>,
     pub(super) ior: Option<Spanned<f32>>,
     pub(super) radiance: Option<Spanned<RawRgb>>,
+    pub(super) albedo_map: Option<Spanned<String>>,
+    pub(super) roughness_map: Option<Spanned<String>>,
+    pub(super) emission_map: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
