@@ -176,3 +176,46 @@ fn screen_rate_follows_distance() {
     assert!(fine.triangles.len() > 8 * d.triangles.len() / 2);
     assert_eq!(open_edges(&fine), 0);
 }
+
+/// Measured rates follow the displacement: on the cube at a target edge length, noise with a
+/// higher amplitude or frequency lengthens the displaced edges and raises their rates (more
+/// triangles), the dicing stays closed, and `estimate_size` (which measures the same displaced
+/// curves) bounds the result. Uniform rates stay the caller's.
+#[test]
+fn measured_rates_follow_the_displacement() {
+    use limitray::dice::{estimate_size, Displacement};
+    let mesh = common::cube_builder().build().unwrap();
+    let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+    let count = |rate: DiceRate, displace: Option<Displacement>| {
+        let opts = DiceOptions {
+            rate,
+            max_rate: 256,
+            displace,
+        };
+        let d = dice(&table, &mesh, &opts).unwrap();
+        let est = estimate_size(&table, &mesh, &opts).unwrap();
+        assert!(d.triangles.len() as f64 <= est.triangles, "{rate:?}");
+        assert_eq!(open_edges(&d), 0, "{rate:?}");
+        d.triangles.len()
+    };
+    let noise = |amplitude: f64, frequency: f64| {
+        Some(Displacement::Noise {
+            amplitude,
+            frequency,
+        })
+    };
+    let by_length = DiceRate::EdgeLength(0.25);
+    let plain = count(by_length, None);
+    let low = count(by_length, noise(0.05, 2.0));
+    let high = count(by_length, noise(0.3, 2.0));
+    let fine = count(by_length, noise(0.3, 6.0));
+    eprintln!("triangles: plain {plain}, low {low}, high {high}, fine {fine}");
+    assert!(
+        plain <= low && low < high && high < fine,
+        "{plain} {low} {high} {fine}"
+    );
+    assert_eq!(
+        count(DiceRate::Uniform(6), noise(0.3, 6.0)),
+        count(DiceRate::Uniform(6), None)
+    );
+}

@@ -33,7 +33,7 @@ use crate::mesh::ControlMesh;
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
-use crate::vec3::{cross, norm};
+use crate::vec3::{cross, norm, sub};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -172,6 +172,40 @@ impl<'a> Displacer<'a> {
         };
         Ok(self.d.apply_at(s, n, st))
     }
+
+    /// How many cells of the displacement's detail (noise lattice cells, or texels along the
+    /// image's larger side) the curve through `plain` (limit points at `points(i / (len - 1))`
+    /// of face `f`) crosses.
+    fn detail_along(
+        &self,
+        f: u32,
+        plain: &[[f64; 3]],
+        points: &dyn Fn(f64) -> (u32, f64, f64),
+    ) -> Result<f64> {
+        match self.d {
+            Displacement::Noise { frequency, .. } => {
+                let len: f64 = plain.windows(2).map(|w| norm(sub(w[1], w[0]))).sum();
+                Ok(len * frequency)
+            }
+            #[cfg(feature = "render")]
+            Displacement::Map { texture, .. } => {
+                let n = plain.len().max(2) - 1;
+                let mut st = Vec::with_capacity(n + 1);
+                for i in 0..=n {
+                    let (k, u, v) = points(i as f64 / n as f64);
+                    st.push(match &self.uv {
+                        Some(uv) => uv.eval(FaceCoord::new(f, k, u, v))?.st,
+                        None => [u, v],
+                    });
+                }
+                let len: f64 = st
+                    .windows(2)
+                    .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+                    .sum();
+                Ok(len * texture.width().max(texture.height()) as f64)
+            }
+        }
+    }
 }
 
 /// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
@@ -253,7 +287,12 @@ pub fn estimate_size(
     opts: &DiceOptions,
 ) -> Result<DiceEstimate> {
     let (level, _) = Level::base(mesh, &table.mesh_options)?;
-    let rates = edge_rates(table, &level, opts)?;
+    let displacer = opts
+        .displace
+        .as_ref()
+        .map(|d| Displacer::new(d, table, mesh))
+        .transpose()?;
+    let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
     Ok(estimate::estimate(&level, &rates))
 }
 
@@ -269,12 +308,12 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     }
     let topo = &level.topo;
     let live = |f: usize| !level.face_hole[f];
-    let rates = edge_rates(table, &level, opts)?;
     let displacer = opts
         .displace
         .as_ref()
         .map(|d| Displacer::new(d, table, mesh))
         .transpose()?;
+    let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
     crate::memory::check(
         "dicing",
         estimate::estimate(&level, &rates).bytes(),

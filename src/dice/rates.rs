@@ -52,8 +52,27 @@ type Measure = Box<dyn Fn(&[[f64; 3]]) -> f64 + Sync>;
 /// Samples per curve when measuring lengths.
 const MEASURE_SEGMENTS: usize = 8;
 
-/// Computes the rates of every edge and spoke of `level` (the base level of the table's mesh).
+/// Computes the rates of every edge and spoke of `level` (the base level of the table's mesh),
+/// measured on the limit surface (without `opts.displace`: [`super::dice`] measures the
+/// displaced surface).
 pub fn edge_rates(table: &PatchTable, level: &Level, opts: &DiceOptions) -> Result<Rates> {
+    rates_for(table, level, opts, None)
+}
+
+/// Most samples of one displaced curve when measuring it.
+const MAX_DISPLACED_SEGMENTS: usize = 256;
+
+/// [`edge_rates`] with measured rates taken on the displaced surface: each curve is sampled
+/// finely enough to follow the displacement (four samples per noise lattice cell or per texel
+/// along it, at least [`MEASURE_SEGMENTS`], at most [`MAX_DISPLACED_SEGMENTS`]), so the
+/// length the displacement adds raises the rate. Uniform rates are the caller's choice and
+/// stay.
+pub(super) fn rates_for(
+    table: &PatchTable,
+    level: &Level,
+    opts: &DiceOptions,
+    displacer: Option<&super::Displacer>,
+) -> Result<Rates> {
     let topo = &level.topo;
     let max_rate = opts.max_rate.max(1);
     let live = |f: usize| !level.face_hole[f];
@@ -127,10 +146,22 @@ pub fn edge_rates(table: &PatchTable, level: &Level, opts: &DiceOptions) -> Resu
         }
     };
     let curve = |f: usize, points: &dyn Fn(f64) -> (u32, f64, f64)| -> Result<Vec<[f64; 3]>> {
-        (0..=MEASURE_SEGMENTS)
+        let plain = (0..=MEASURE_SEGMENTS)
             .map(|i| {
                 let (k, u, v) = points(i as f64 / MEASURE_SEGMENTS as f64);
                 Ok(table.eval(FaceCoord::new(f as u32, k, u, v))?.p)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let Some(d) = displacer else {
+            return Ok(plain);
+        };
+        let cells = d.detail_along(f as u32, &plain, points)?;
+        let n = ((4.0 * cells).ceil() as usize).clamp(MEASURE_SEGMENTS, MAX_DISPLACED_SEGMENTS);
+        (0..=n)
+            .map(|i| {
+                let (k, u, v) = points(i as f64 / n as f64);
+                let q = super::eval_point(table, Some(d), f as u32, k, u, v)?;
+                Ok(q.p.map(f64::from))
             })
             .collect()
     };
