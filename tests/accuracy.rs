@@ -64,3 +64,63 @@ fn hits_lie_within_the_dicing_error_bound() {
         }
     }
 }
+
+/// On displaced surfaces (noise, and an image map addressed per face), every diced hit lies
+/// within its triangle's error bound measured against the displaced surface
+/// (`triangle_error_bound_with` over `DisplacedSurface::point`) of the displaced point at its
+/// reported parameters: the hit parameters are as good as the dicing's own bound says.
+#[test]
+fn displaced_hits_lie_within_the_displaced_error_bound() {
+    use limitray::dice::{DisplacedSurface, Displacement};
+    use limitray::harness::probe::bound_ratio;
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes");
+    // A smooth image (noise with features about 5 texels wide): the lattice bound samples a
+    // triangle at 1/16 of its size and assumes the surface smooth at that scale, which an
+    // image with detail below it (random texels at rate 4) breaks.
+    let texels: Vec<[f32; 3]> = (0..32 * 32)
+        .map(|i| {
+            let (x, y) = ((i % 32) as f64 * 0.2, (i / 32) as f64 * 0.2);
+            [(0.5 + 0.5 * limitray::texture::noise::noise([x, y, 0.3]).0) as f32; 3]
+        })
+        .collect();
+    let map = Displacement::Map {
+        texture: std::sync::Arc::new(limitray::texture::image::ImageTexture::from_rgb(
+            32, 32, texels,
+        )),
+        scale: 0.02,
+        file: "smooth.png".into(),
+    };
+    for name in ["blob.obj", "rounded_box_s2.obj"] {
+        let mesh = read_obj(&scene.join(name)).unwrap();
+        let diag = mesh.diagonal();
+        let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        let noise = Displacement::Noise {
+            amplitude: 0.03 * diag,
+            frequency: 4.0 / diag,
+        };
+        for displace in [noise, map.clone()] {
+            let surface = DisplacedSurface::new(&displace, &table, &mesh).unwrap();
+            let point = |at| surface.point(at).ok();
+            for rate in [4u32, 16, 48] {
+                let d = dice(
+                    &table,
+                    &mesh,
+                    &DiceOptions {
+                        rate: DiceRate::Uniform(rate),
+                        max_rate: 256,
+                        displace: Some(displace.clone()),
+                    },
+                )
+                .unwrap();
+                let bvh = MeshBvh::build(d);
+                let (ratio, hits) = bound_ratio(&point, &bvh, 2000, 5, diag);
+                eprintln!(
+                    "{name} {} rate {rate}: {hits} hits, bound ratio {ratio:.3}",
+                    displace.key()
+                );
+                assert!(hits >= 1900, "{name} rate {rate}: {hits} hits");
+                assert!(ratio <= BOUND_RATIO, "{name} rate {rate}: ratio {ratio}");
+            }
+        }
+    }
+}

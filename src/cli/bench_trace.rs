@@ -36,6 +36,10 @@ pub struct TraceBenchArgs {
     /// (the diced surface's at rate 1, as without `--exact`).
     #[arg(long)]
     pub exact: bool,
+    /// Displace the diced surface (`noise:AMPLITUDE:FREQUENCY` or `map:FILE:SCALE`, as `dice`);
+    /// the dicing time then includes the displacement.
+    #[arg(long, value_parser = super::args::parse_displacement)]
+    pub displace: Option<crate::dice::Displacement>,
 }
 
 /// Median of wall-clock seconds of `reps` runs of `f`.
@@ -62,6 +66,12 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
     let (_, mesh) = args.source.load()?;
     let threads = args.threads.count();
     if args.exact {
+        if args.displace.is_some() {
+            return Err(crate::error::Error::new(
+                crate::error::ErrorKind::Usage,
+                "--exact measures the exact limit surface, which --displace leaves: drop one",
+            ));
+        }
         return args
             .threads
             .pool()?
@@ -84,7 +94,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             &DiceOptions {
                 rate: DiceRate::Uniform(args.rate),
                 max_rate: 1024,
-                displace: None,
+                displace: args.displace.clone(),
             },
         )?;
         let t2 = std::time::Instant::now();

@@ -135,15 +135,18 @@ struct Point {
     param: FaceCoord,
 }
 
-/// A displacement with what its lookups need: the mesh's limit texture coordinates for an
-/// image map (none on a mesh without them: the (sub-)face's own `(u, v)` address the image).
-struct Displacer<'a> {
+/// A displaced limit surface: a displacement with what its lookups need (the mesh's limit
+/// texture coordinates for an image map; none on a mesh without them, where the (sub-)face's
+/// own `(u, v)` address the image). [`dice`] evaluates it at every diced vertex.
+pub struct DisplacedSurface<'a> {
     d: &'a Displacement,
+    table: &'a PatchTable,
     uv: Option<crate::patch::uv::UvSurface>,
 }
 
-impl<'a> Displacer<'a> {
-    fn new(d: &'a Displacement, table: &PatchTable, mesh: &ControlMesh) -> Result<Self> {
+impl<'a> DisplacedSurface<'a> {
+    /// The surface of `table` (built from `mesh`) displaced by `d`.
+    pub fn new(d: &'a Displacement, table: &'a PatchTable, mesh: &ControlMesh) -> Result<Self> {
         let uv = if d.uses_uv() && !mesh.face_uvs.is_empty() {
             let m = ControlMesh {
                 options: table.mesh_options,
@@ -153,7 +156,13 @@ impl<'a> Displacer<'a> {
         } else {
             None
         };
-        Ok(Displacer { d, uv })
+        Ok(DisplacedSurface { d, table, uv })
+    }
+
+    /// The displaced point at `at` (in `f64`, before the dicer rounds it to `f32`).
+    pub fn point(&self, at: FaceCoord) -> Result<[f64; 3]> {
+        let (s, n) = limit_frame(self.table, at)?;
+        Ok(self.apply(&s, n, at)?.0)
     }
 
     fn apply(
@@ -208,23 +217,15 @@ impl<'a> Displacer<'a> {
     }
 }
 
-/// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
-/// vanishes (corners of boundary faces, crease ends), the normal is taken a little inside the
-/// domain.
-fn eval_point(
-    table: &PatchTable,
-    displace: Option<&Displacer>,
-    face: u32,
-    k: u32,
-    u: f64,
-    v: f64,
-) -> Result<Point> {
-    let s = table.eval(FaceCoord::new(face, k, u, v))?;
+/// The limit sample at `at` and its unit normal. Where the parametric normal vanishes (corners
+/// of boundary faces, crease ends), the normal is taken a little inside the domain.
+fn limit_frame(table: &PatchTable, at: FaceCoord) -> Result<(crate::patch::Sample, [f64; 3])> {
+    let s = table.eval(at)?;
     let mut n = cross(s.du, s.dv);
     let scale = norm(s.du) * norm(s.dv);
     if norm(n).is_nan() || norm(n) <= 1e-10 * scale {
-        let (u2, v2) = (u + (0.5 - u) * 1e-4, v + (0.5 - v) * 1e-4);
-        let s2 = table.eval(FaceCoord::new(face, k, u2, v2))?;
+        let (u2, v2) = (at.u + (0.5 - at.u) * 1e-4, at.v + (0.5 - at.v) * 1e-4);
+        let s2 = table.eval(FaceCoord::new(at.face, at.k, u2, v2))?;
         n = cross(s2.du, s2.dv);
     }
     let l = norm(n);
@@ -233,6 +234,21 @@ fn eval_point(
     } else {
         [0.0, 0.0, 1.0]
     };
+    Ok((s, n))
+}
+
+/// Evaluates position and unit normal at `(face, k, u, v)`. Where the parametric normal
+/// vanishes (corners of boundary faces, crease ends), the normal is taken a little inside the
+/// domain.
+fn eval_point(
+    table: &PatchTable,
+    displace: Option<&DisplacedSurface>,
+    face: u32,
+    k: u32,
+    u: f64,
+    v: f64,
+) -> Result<Point> {
+    let (s, n) = limit_frame(table, FaceCoord::new(face, k, u, v))?;
     let (p, n) = match displace {
         Some(d) => d.apply(&s, n, FaceCoord::new(face, k, u, v))?,
         None => (s.p, n),
@@ -290,7 +306,7 @@ pub fn estimate_size(
     let displacer = opts
         .displace
         .as_ref()
-        .map(|d| Displacer::new(d, table, mesh))
+        .map(|d| DisplacedSurface::new(d, table, mesh))
         .transpose()?;
     let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
     Ok(estimate::estimate(&level, &rates))
@@ -311,7 +327,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     let displacer = opts
         .displace
         .as_ref()
-        .map(|d| Displacer::new(d, table, mesh))
+        .map(|d| DisplacedSurface::new(d, table, mesh))
         .transpose()?;
     let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
     crate::memory::check(
@@ -499,7 +515,7 @@ struct DomainCtx<'a> {
     shared: &'a Shared,
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
-    displace: Option<&'a Displacer<'a>>,
+    displace: Option<&'a DisplacedSurface<'a>>,
 }
 
 /// A point on a domain's side: its shared index, and whether it lies on a seam.

@@ -71,7 +71,7 @@ pub(super) fn rates_for(
     table: &PatchTable,
     level: &Level,
     opts: &DiceOptions,
-    displacer: Option<&super::Displacer>,
+    displacer: Option<&super::DisplacedSurface>,
 ) -> Result<Rates> {
     let topo = &level.topo;
     let max_rate = opts.max_rate.max(1);

@@ -181,6 +181,16 @@ const LATTICE: usize = 16;
 /// 1/16 of the triangle) a smooth error function, which vanishes at the corners, rises by at
 /// most ~1/256 of its curvature term above its sampled maximum; 10% covers that.
 pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f64 {
+    triangle_error_bound_with(&|at| table.eval(at).ok().map(|s| s.p), d, tri)
+}
+
+/// [`triangle_error_bound`] against any surface `point(at)` over the triangle's parameters
+/// (a displaced surface: [`crate::dice::DisplacedSurface::point`]).
+pub fn triangle_error_bound_with(
+    point: &dyn Fn(FaceCoord) -> Option<[f64; 3]>,
+    d: &DicedMesh,
+    tri: usize,
+) -> f64 {
     let info = &d.tri_info[tri];
     let [a, b, c] = d.triangles[tri].map(|i| d.positions[i as usize].map(|x| x as f64));
     let uv = info.uv.map(|p| [p[0] as f64, p[1] as f64]);
@@ -191,11 +201,11 @@ pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f6
             let l0 = 1.0 - l1 - l2;
             let u = l0 * uv[0][0] + l1 * uv[1][0] + l2 * uv[2][0];
             let v = l0 * uv[0][1] + l1 * uv[1][1] + l2 * uv[2][1];
-            let Ok(s) = table.eval(FaceCoord::new(info.face, info.k, u, v)) else {
+            let Some(p) = point(FaceCoord::new(info.face, info.k, u, v)) else {
                 continue;
             };
             let lin: [f64; 3] = std::array::from_fn(|k| l0 * a[k] + l1 * b[k] + l2 * c[k]);
-            worst = worst.max(norm(sub(s.p, lin)));
+            worst = worst.max(norm(sub(p, lin)));
         }
     }
     worst * 1.1
@@ -211,34 +221,7 @@ pub fn accuracy(exact: &ExactTracer, bvh: &MeshBvh, n: usize, seed: u64) -> Accu
     if d.triangles.is_empty() {
         return Accuracy::default();
     }
-    let mut rng = SplitMix64(seed);
-    let rays: Vec<Ray> = (0..n)
-        .map(|_| {
-            let t = d.triangles[rng.below(d.triangles.len())];
-            let (mut w1, mut w2) = (rng.next_f64(), rng.next_f64());
-            if w1 + w2 > 1.0 {
-                (w1, w2) = (1.0 - w1, 1.0 - w2);
-            }
-            let [a, b, c] = t.map(|i| d.positions[i as usize].map(|x| x as f64));
-            let target: [f64; 3] =
-                std::array::from_fn(|k| a[k] + w1 * (b[k] - a[k]) + w2 * (c[k] - a[k]));
-            let ng = cross(sub(b, a), sub(c, a));
-            let l = norm(ng).max(f64::MIN_POSITIVE);
-            // Origin in the hemisphere above the triangle, 30° to 90° elevation.
-            let z = 0.5 + 0.5 * rng.next_f64();
-            let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
-            let r = (1.0 - z * z).sqrt();
-            let n = ng.map(|x| x / l);
-            let (tu, tv) = basis(n);
-            let dir: [f64; 3] =
-                std::array::from_fn(|k| n[k] * z + tu[k] * r * phi.cos() + tv[k] * r * phi.sin());
-            let o: [f64; 3] = std::array::from_fn(|k| target[k] + dir[k] * 0.5 * diag);
-            Ray::new(
-                o.map(|x| x as f32),
-                std::array::from_fn(|k| (target[k] - o[k]) as f32),
-            )
-        })
-        .collect();
+    let rays = rays_from_above(d, n, seed, diag);
     // Per ray: (diced hit's parameter error, distance along the ray to the exact first hit,
     // bound ratio) when both hit; otherwise whether they disagree; and whether it grazes.
     type Row = (Option<(f64, Option<(f64, f64)>)>, bool, bool);
@@ -291,6 +274,74 @@ pub fn accuracy(exact: &ExactTracer, bvh: &MeshBvh, n: usize, seed: u64) -> Accu
     acc.mean_param /= count_param.max(1) as f64;
     acc.mean_surface /= acc.samples.max(1) as f64;
     acc
+}
+
+/// `n` rays aimed from outside at random points of random triangles of `d` (deterministic in
+/// `seed`), from half a diagonal `diag` away, 30° to 90° above the triangle.
+fn rays_from_above(d: &DicedMesh, n: usize, seed: u64, diag: f64) -> Vec<Ray> {
+    let mut rng = SplitMix64(seed);
+    (0..n)
+        .map(|_| {
+            let t = d.triangles[rng.below(d.triangles.len())];
+            let (mut w1, mut w2) = (rng.next_f64(), rng.next_f64());
+            if w1 + w2 > 1.0 {
+                (w1, w2) = (1.0 - w1, 1.0 - w2);
+            }
+            let [a, b, c] = t.map(|i| d.positions[i as usize].map(|x| x as f64));
+            let target: [f64; 3] =
+                std::array::from_fn(|k| a[k] + w1 * (b[k] - a[k]) + w2 * (c[k] - a[k]));
+            let ng = cross(sub(b, a), sub(c, a));
+            let l = norm(ng).max(f64::MIN_POSITIVE);
+            // Origin in the hemisphere above the triangle, 30° to 90° elevation.
+            let z = 0.5 + 0.5 * rng.next_f64();
+            let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
+            let r = (1.0 - z * z).sqrt();
+            let n = ng.map(|x| x / l);
+            let (tu, tv) = basis(n);
+            let dir: [f64; 3] =
+                std::array::from_fn(|k| n[k] * z + tu[k] * r * phi.cos() + tv[k] * r * phi.sin());
+            let o: [f64; 3] = std::array::from_fn(|k| target[k] + dir[k] * 0.5 * diag);
+            Ray::new(
+                o.map(|x| x as f32),
+                std::array::from_fn(|k| (target[k] - o[k]) as f32),
+            )
+        })
+        .collect()
+}
+
+/// The largest ratio, over `n` rays aimed at random diced triangles (as [`accuracy`] aims
+/// them), of a hit's distance from `point` at the hit's reported parameters over its
+/// triangle's error bound against `point` ([`triangle_error_bound_with`]) plus the rounding of
+/// an `f32` hit; and how many rays hit. For surfaces without a reference intersector
+/// (displaced ones): the hit parameters are as good as the dicing's own bound says.
+pub fn bound_ratio(
+    point: &(dyn Fn(FaceCoord) -> Option<[f64; 3]> + Sync),
+    bvh: &MeshBvh,
+    n: usize,
+    seed: u64,
+    diag: f64,
+) -> (f64, usize) {
+    let d = &bvh.diced;
+    if d.triangles.is_empty() {
+        return (0.0, 0);
+    }
+    let rays = rays_from_above(d, n, seed, diag);
+    let per: Vec<Option<f64>> = rays
+        .par_iter()
+        .map(|ray| {
+            let h = bvh.intersect(ray)?;
+            let o = ray.origin.map(|x| x as f64);
+            let dir = ray.dir.map(|x| x as f64);
+            let hp: [f64; 3] = std::array::from_fn(|k| o[k] + h.t as f64 * dir[k]);
+            let p = point(FaceCoord::new(h.face, h.k, h.u as f64, h.v as f64))?;
+            let bound = triangle_error_bound_with(point, d, h.triangle as usize);
+            let mag = hp.iter().chain(&o).fold(0.0f64, |m, v| m.max(v.abs()));
+            let slack = 8.0 * mag * f32::EPSILON as f64;
+            Some(norm(sub(hp, p)) / (bound + slack))
+        })
+        .collect();
+    let hits = per.iter().flatten().count();
+    (per.into_iter().flatten().fold(0.0, f64::max), hits)
 }
 
 fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
