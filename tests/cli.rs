@@ -826,18 +826,7 @@ fn displace_on_dice_and_trace() {
         .fold(0.0f64, f64::max);
     assert!(d > 0.05 && d <= 0.22 + 1e-6, "largest displacement {d}");
     let ray = b"0.1 0.2 5 0 0 -1\n";
-    let hit = |extra: &[&str]| -> f64 {
-        let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
-        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
-        let o = common::run_limitray(&args, Some(ray));
-        assert_success(&o, "trace");
-        stdout(&o)
-            .split_whitespace()
-            .nth(1)
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
+    let hit = |extra: &[&str]| first_hit_t(&mesh, extra, ray);
     let (t0, t1) = (
         hit(&["--rate", "16"]),
         hit(&["--rate", "16", "--displace", "noise:0.2:2"]),
@@ -894,23 +883,26 @@ fn displace_by_an_image_map() {
         assert!((d - 0.1).abs() < 1e-6, "{a:?} -> {b:?}: {d}");
     }
     let ray = b"0 0 5 0 0 -1\n";
-    let hit = |extra: &[&str]| -> f64 {
-        let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
-        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
-        let o = common::run_limitray(&args, Some(ray));
-        assert_success(&o, "trace");
-        stdout(&o)
-            .split_whitespace()
-            .nth(1)
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
+    let hit = |extra: &[&str]| first_hit_t(&mesh, extra, ray);
     let (t0, t1) = (
         hit(&["--rate", "16"]),
         hit(&["--rate", "16", "--displace", &spec]),
     );
     assert!((t0 - t1 - 0.1).abs() < 1e-4, "{t0} {t1}");
+}
+
+/// The `t` of `limitray trace MESH EXTRA…`'s first answer to `ray` (which must hit).
+fn first_hit_t(mesh: &Path, extra: &[&str], ray: &[u8]) -> f64 {
+    let mut args: Vec<&std::ffi::OsStr> = vec!["trace".as_ref(), mesh.as_os_str()];
+    args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+    let o = common::run_limitray(&args, Some(ray));
+    assert_success(&o, "trace");
+    stdout(&o)
+        .split_whitespace()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap()
 }
 
 fn refine_to_file_cmd(

@@ -159,6 +159,18 @@ impl<'a> DisplacedSurface<'a> {
         Ok(DisplacedSurface { d, table, uv })
     }
 
+    /// The displaced surface `opts` asks for, if any.
+    fn of(
+        opts: &'a DiceOptions,
+        table: &'a PatchTable,
+        mesh: &ControlMesh,
+    ) -> Result<Option<Self>> {
+        opts.displace
+            .as_ref()
+            .map(|d| DisplacedSurface::new(d, table, mesh))
+            .transpose()
+    }
+
     /// The displaced point at `at` (in `f64`, before the dicer rounds it to `f32`).
     pub fn point(&self, at: FaceCoord) -> Result<[f64; 3]> {
         let (s, n) = limit_frame(self.table, at)?;
@@ -303,11 +315,7 @@ pub fn estimate_size(
     opts: &DiceOptions,
 ) -> Result<DiceEstimate> {
     let (level, _) = Level::base(mesh, &table.mesh_options)?;
-    let displacer = opts
-        .displace
-        .as_ref()
-        .map(|d| DisplacedSurface::new(d, table, mesh))
-        .transpose()?;
+    let displacer = DisplacedSurface::of(opts, table, mesh)?;
     let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
     Ok(estimate::estimate(&level, &rates))
 }
@@ -324,11 +332,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     }
     let topo = &level.topo;
     let live = |f: usize| !level.face_hole[f];
-    let displacer = opts
-        .displace
-        .as_ref()
-        .map(|d| DisplacedSurface::new(d, table, mesh))
-        .transpose()?;
+    let displacer = DisplacedSurface::of(opts, table, mesh)?;
     let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
     crate::memory::check(
         "dicing",

@@ -228,6 +228,49 @@ fn edge_value(
     [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])]
 }
 
+/// How one value sits at its vertex: what decides whether a [`FVarMode`] pins it.
+pub(super) struct ValueShape<'a> {
+    /// Faces around the vertex that carry the value.
+    pub sector: usize,
+    /// Seam (or boundary) edge sides bounding the value's faces.
+    pub seams: usize,
+    /// Faces carrying each of the vertex's values (its siblings), this one included.
+    pub sector_sizes: &'a [usize],
+    /// Faces around the vertex.
+    pub faces: usize,
+    /// Whether the vertex is on the mesh's boundary.
+    pub on_boundary: bool,
+}
+
+impl ValueShape<'_> {
+    /// Whether `mode` makes the value a corner: a corner of the values (one face), a junction
+    /// of three or more values, a concave corner (a sector wider than a half-plane: more than
+    /// half the faces around an interior vertex, more than two at a boundary vertex, or the
+    /// other of two values is a corner), or any seam value in modes `boundaries` and `all`.
+    pub fn pinned_by(&self, mode: FVarMode) -> bool {
+        let corner = self.sector == 1;
+        let junction = self.sector_sizes.len() >= 3;
+        let other_is_corner = self.sector_sizes.len() == 2
+            && self.sector_sizes.iter().filter(|&&n| n == 1).count() > usize::from(corner);
+        let concave = other_is_corner
+            || self.seams == 2
+                && if self.on_boundary {
+                    // A boundary vertex with one value is the mesh's own boundary, not a
+                    // corner of the values.
+                    self.sector_sizes.len() >= 2 && self.sector > 2
+                } else {
+                    2 * self.sector > self.faces
+                };
+        match mode {
+            FVarMode::None => false,
+            FVarMode::CornersOnly => corner,
+            FVarMode::CornersPlus1 => corner || junction,
+            FVarMode::CornersPlus2 => corner || junction || concave,
+            FVarMode::Boundaries | FVarMode::All => true,
+        }
+    }
+}
+
 fn vertex_value(
     parent: &Level,
     values: &FVarLevel,
@@ -382,8 +425,6 @@ fn vertex_value(
             .collect();
         s = turning.iter().map(|&x| x as f64).sum::<f64>() / turning.len().max(1) as f64;
     }
-    let corner = sector.len() == 1;
-    let junction = siblings.len() >= 3;
     let dart = seams.len() == 1;
     // A sector wider than a half-plane: more than half the faces around an interior vertex,
     // more than two at a boundary vertex.
@@ -391,26 +432,18 @@ fn vertex_value(
         .vertex_edges(v)
         .iter()
         .any(|&e| topo.edge_is_boundary(e));
-    let other_is_corner = siblings.len() == 2
-        && siblings
-            .iter()
-            .any(|&y| y != x && (0..faces.len()).filter(|&i| value_at(i) == y).count() == 1);
-    let concave = other_is_corner
-        || seams.len() == 2
-            && if on_boundary {
-                // A boundary vertex with one value is the mesh's own boundary, not a corner of
-                // the values.
-                siblings.len() >= 2 && sector.len() > 2
-            } else {
-                2 * sector.len() > faces.len()
-            };
-    let sharp = match mode {
-        FVarMode::None => false,
-        FVarMode::CornersOnly => corner,
-        FVarMode::CornersPlus1 => corner || junction,
-        FVarMode::CornersPlus2 => corner || junction || concave,
-        FVarMode::Boundaries | FVarMode::All => true,
+    let sizes: Vec<usize> = siblings
+        .iter()
+        .map(|&y| (0..faces.len()).filter(|&i| value_at(i) == y).count())
+        .collect();
+    let own = ValueShape {
+        sector: sector.len(),
+        seams: seams.len(),
+        sector_sizes: &sizes,
+        faces: faces.len(),
+        on_boundary,
     };
+    let sharp = own.pinned_by(mode);
     if sharp || seams.len() != 2 {
         if dart && !sharp {
             return apply_row(parent, values, table, v, &sector);

@@ -178,26 +178,18 @@ fn pinned_values(
         if seams == 0 {
             continue;
         }
-        let corner = sector == 1;
-        let junction = siblings.len() >= 3;
-        let other_is_corner = siblings.len() == 2
-            && siblings
-                .iter()
-                .any(|&y| y != x && (0..faces.len()).filter(|&i| value_at(i) == y).count() == 1);
-        let concave = other_is_corner
-            || seams == 2
-                && if on_boundary {
-                    siblings.len() >= 2 && sector > 2
-                } else {
-                    2 * sector > faces.len()
-                };
-        let sharp = match mode {
-            FVarMode::None => false,
-            FVarMode::CornersOnly => corner,
-            FVarMode::CornersPlus1 => corner || junction,
-            FVarMode::CornersPlus2 => corner || junction || concave,
-            FVarMode::Boundaries | FVarMode::All => true,
-        };
+        let sizes: Vec<usize> = siblings
+            .iter()
+            .map(|&y| (0..faces.len()).filter(|&i| value_at(i) == y).count())
+            .collect();
+        let sharp = super::fvar::ValueShape {
+            sector,
+            seams,
+            sector_sizes: &sizes,
+            faces: faces.len(),
+            on_boundary,
+        }
+        .pinned_by(mode);
         if sharp || seams > 2 {
             out.push(x);
         }
