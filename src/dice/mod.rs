@@ -203,6 +203,8 @@ impl<'a> DisplacedSurface<'a> {
         plain: &[[f64; 3]],
         points: &dyn Fn(f64) -> (u32, f64, f64),
     ) -> Result<f64> {
+        #[cfg(not(feature = "render"))]
+        let _ = (f, points);
         match self.d {
             Displacement::Noise { frequency, .. } => {
                 let len: f64 = plain.windows(2).map(|w| norm(sub(w[1], w[0]))).sum();
