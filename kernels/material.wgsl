@@ -1,18 +1,69 @@
 // Materials of the GPU path tracer (src/render/material.rs): diffuse, GGX conductor (complex
-// IOR or Schlick), smooth and rough dielectric, emissive. Needs sampling.wgsl and path.wgsl.
+// IOR or Schlick), smooth and rough dielectric, emissive. Needs sampling.wgsl, texture.wgsl
+// and path.wgsl.
 
 // ---------------------------------------------------------------------------------------------
-// material.rs. Material at word m (MAT_WORDS words): kind (M_*), then parameters (MAT_*).
+// material.rs. A material record at word m (MAT_WORDS words): kind (M_*), parameters (MAT_*)
+// and its maps; loaded into a Mat with its maps applied at the hit (texturing.rs).
 
-fn mat_kind(m: u32) -> u32 {
-    return gw(m + MAT_KIND);
+struct Mat {
+    kind: u32,
+    // Albedo, eta, f0 or radiance; the IOR in x for a dielectric.
+    color: vec3<f32>,
+    // Conductor k.
+    k: vec3<f32>,
+    alpha: f32,
 }
 
-fn mat_alpha(m: u32) -> f32 {
-    return gf(m + MAT_ALPHA);
+fn mat_load(m: u32) -> Mat {
+    return Mat(gw(m + MAT_KIND), v3(m + MAT_COLOR), v3(m + MAT_K), gf(m + MAT_ALPHA));
 }
 
-fn mat_is_delta(m: u32) -> bool {
+fn mat_kind(m: Mat) -> u32 {
+    return m.kind;
+}
+
+fn mat_alpha(m: Mat) -> f32 {
+    return m.alpha;
+}
+
+// Where a material's maps are read (texturing.rs Lookup): texture coordinates, the
+// object-space point and the filter width in texture units.
+struct TexLookup {
+    st: vec2<f32>,
+    p: vec3<f32>,
+    footprint: f32,
+}
+
+// MaterialTextures::apply: the material at word m with its maps read at `at`.
+fn mat_textured(m: u32, at: TexLookup) -> Mat {
+    var mat = mat_load(m);
+    let albedo = gw(m + MAT_ALBEDO_MAP);
+    let roughness = gw(m + MAT_ROUGHNESS_MAP);
+    let emission = gw(m + MAT_EMISSION_MAP);
+    if (mat.kind == M_DIFFUSE && albedo != NONE) {
+        let c = mat.color * texture_rgb(albedo, at.st, at.p, at.footprint);
+        mat.color = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    if ((mat.kind == M_CONDUCTOR || mat.kind == M_SCHLICK || mat.kind == M_DIELECTRIC)
+        && roughness != NONE) {
+        let r = fclamp(texture_scalar(roughness, at.st, at.p, at.footprint), 0.0, 1.0);
+        mat.alpha = r * r;
+    }
+    if (mat.kind == M_EMISSIVE && emission != NONE) {
+        let c = texture_rgb(emission, at.st, at.p, at.footprint);
+        mat.color = mat.color * max(c, vec3<f32>(0.0));
+    }
+    return mat;
+}
+
+// Whether the material at word m has a map.
+fn mat_has_maps(m: u32) -> bool {
+    return gw(m + MAT_ALBEDO_MAP) != NONE || gw(m + MAT_ROUGHNESS_MAP) != NONE
+        || gw(m + MAT_EMISSION_MAP) != NONE;
+}
+
+fn mat_is_delta(m: Mat) -> bool {
     let k = mat_kind(m);
     return (k == M_CONDUCTOR || k == M_SCHLICK || k == M_DIELECTRIC) && mat_alpha(m) < DELTA_ALPHA;
 }
@@ -67,27 +118,27 @@ fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     return fclamp(0.5 * (rp + rs), 0.0, 1.0);
 }
 
-fn fresnel_eval(m: u32, cos_i: f32) -> vec3<f32> {
+fn fresnel_eval(m: Mat, cos_i: f32) -> vec3<f32> {
     if (mat_kind(m) == M_CONDUCTOR) {
-        let eta = v3(m + MAT_COLOR);
-        let k = v3(m + MAT_K);
+        let eta = m.color;
+        let k = m.k;
         return vec3<f32>(
             fresnel_conductor(cos_i, eta.x, k.x),
             fresnel_conductor(cos_i, eta.y, k.y),
             fresnel_conductor(cos_i, eta.z, k.z),
         );
     }
-    let f0 = v3(m + MAT_COLOR);
+    let f0 = m.color;
     let mm = fclamp(1.0 - cos_i, 0.0, 1.0);
     let m2 = mm * mm;
     let m5 = m2 * m2 * mm;
     return f0 + (vec3<f32>(1.0) - f0) * m5;
 }
 
-fn mat_albedo(m: u32) -> vec3<f32> {
+fn mat_albedo(m: Mat) -> vec3<f32> {
     let k = mat_kind(m);
     if (k == M_DIFFUSE) {
-        return v3(m + MAT_COLOR);
+        return m.color;
     }
     if (k == M_CONDUCTOR || k == M_SCHLICK) {
         return fresnel_eval(m, 1.0);
@@ -197,7 +248,7 @@ fn rough_dielectric_eval(wo: vec3<f32>, wi: vec3<f32>, etap: f32, alpha: f32) ->
     return Eval(vec3<f32>(val), pdf);
 }
 
-fn mat_eval(m: u32, wo: vec3<f32>, wi: vec3<f32>, etap: f32) -> Eval {
+fn mat_eval(m: Mat, wo: vec3<f32>, wi: vec3<f32>, etap: f32) -> Eval {
     let zero = Eval(vec3<f32>(0.0), 0.0);
     if (wo.z <= 0.0) {
         return zero;
@@ -207,7 +258,7 @@ fn mat_eval(m: u32, wo: vec3<f32>, wi: vec3<f32>, etap: f32) -> Eval {
         if (wi.z <= 0.0) {
             return zero;
         }
-        return Eval(v3(m + 1u) * (1.0 / PI), wi.z * (1.0 / PI));
+        return Eval(m.color * (1.0 / PI), wi.z * (1.0 / PI));
     }
     if (k == M_CONDUCTOR || k == M_SCHLICK) {
         let alpha = mat_alpha(m);
@@ -286,7 +337,7 @@ fn rough_dielectric_sample(wo: vec3<f32>, etap: f32, alpha: f32, u_lobe: f32, u1
     return BsdfSample(true, wi, vec3<f32>(w), pm * (1.0 - f) * abs(wim) / denom, false);
 }
 
-fn mat_sample(m: u32, wo: vec3<f32>, etap: f32, u_lobe: f32, u1: f32, u2: f32) -> BsdfSample {
+fn mat_sample(m: Mat, wo: vec3<f32>, etap: f32, u_lobe: f32, u1: f32, u2: f32) -> BsdfSample {
     if (wo.z <= 0.0) {
         return no_sample();
     }
@@ -296,7 +347,7 @@ fn mat_sample(m: u32, wo: vec3<f32>, etap: f32, u_lobe: f32, u1: f32, u2: f32) -
         if (wi.z <= 0.0) {
             return no_sample();
         }
-        return BsdfSample(true, wi, v3(m + 1u), wi.z * (1.0 / PI), false);
+        return BsdfSample(true, wi, m.color, wi.z * (1.0 / PI), false);
     }
     if (k == M_CONDUCTOR || k == M_SCHLICK) {
         let alpha = mat_alpha(m);

@@ -216,6 +216,12 @@ struct SurfaceHit {
     p: vec3<f32>,
     ng: vec3<f32>,
     ns: vec3<f32>,
+    // Object-space point (procedural maps).
+    po: vec3<f32>,
+    // Texture coordinates (interpolated from the vertices': src/gpu/texture.rs), and
+    // sqrt(texture area / world area) over the triangle (0 without texture coordinates).
+    st: vec2<f32>,
+    st_scale: f32,
 }
 
 // The world-space hit record (SceneBvh::hit_record and World::hit_point).
@@ -224,7 +230,9 @@ fn surface(h: SceneResult) -> SurfaceHit {
     let m = gw(ib + INST_MESH);
     let rec = P.mesh_off + MESH_WORDS * m;
     let extra = hdr(H_MESH_EXTRA) + MESH_EXTRA_WORDS * m;
-    let lc = leaf_corners(rec, h.leaf, gw(extra + MX_NORMALS), gw(extra + MX_LOOSE_NORMALS));
+    let normals = gw(extra + MX_NORMALS);
+    let loose = gw(extra + MX_LOOSE_NORMALS);
+    let lc = leaf_corners(rec, h.leaf, normals, loose);
     let a = lc.p[0];
     let b = lc.p[1];
     let c = lc.p[2];
@@ -244,14 +252,44 @@ fn surface(h: SceneResult) -> SurfaceHit {
         ns = ng;
     }
     let xf = hdr(H_INST_XF) + XF_WORDS * h.inst;
-    let p = mat3_mul(xf + XF_MATRIX, (a * (1.0 - h.b1 - h.b2) + b * h.b1) + c * h.b2)
-        + v3(xf + XF_TRANSLATION);
+    let po = (a * (1.0 - h.b1 - h.b2) + b * h.b1) + c * h.b2;
+    let p = mat3_mul(xf + XF_MATRIX, po) + v3(xf + XF_TRANSLATION);
+    // Texture coordinates: the corners' records sit where their normals do (2 words for 3).
+    var st = vec2<f32>(0.0);
+    var st_scale = 0.0;
+    let st_grid = gw(extra + MX_ST);
+    if (st_grid != NONE) {
+        var base = st_grid;
+        var first = normals;
+        if ((h.leaf & LEAF_LOOSE) != 0u) {
+            base = gw(extra + MX_LOOSE_ST);
+            first = loose;
+        }
+        var s: array<vec2<f32>, 3>;
+        for (var i = 0u; i < 3u; i++) {
+            let at = base + 2u * ((lc.n[i] - first) / 3u);
+            s[i] = vec2<f32>(gf(at), gf(at + 1u));
+        }
+        st = (s[0] * b0 + s[1] * h.b1) + s[2] * h.b2;
+        let d1 = s[1] - s[0];
+        let d2 = s[2] - s[0];
+        let st_area = abs(d1.x * d2.y - d1.y * d2.x);
+        let w1 = mat3_mul(xf + XF_MATRIX, e1);
+        let w2 = mat3_mul(xf + XF_MATRIX, e2);
+        let area = length3(cross3(w1, w2));
+        if (area > 0.0 && finite(area)) {
+            st_scale = sqrt(st_area / area);
+        }
+    }
     return SurfaceHit(
         h.inst,
         h.t,
         p,
         normalize_div(mat3_mul(xf + XF_NORMAL, ng)),
         normalize_div(mat3_mul(xf + XF_NORMAL, ns)),
+        po,
+        st,
+        st_scale,
     );
 }
 
@@ -279,6 +317,10 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
     var prev_pdf = 0.0;
     var prev_delta = true;
     let nq = hdr(H_NQUADS);
+    // The path's footprint cone (texture filtering, integrator.rs): width at the ray's origin
+    // and spread (radians per unit length).
+    var cone_width = 0.0;
+    var cone_spread = 1.0 / (f32(hdr(H_HEIGHT)) / (2.0 * gf(P.user1 + H_CAMERA + CAM_TAN_HALF_FOV)));
     for (var bounce = 0u; bounce <= max_depth; bounce++) {
         let mh = intersect_world(o, d, 0.0, inf(), false);
         var tmax = inf();
@@ -310,7 +352,14 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
             break;
         }
         let h = surface(mh);
-        let mat = hdr(H_MAT) + MAT_WORDS * gw(hdr(H_INST_MAT) + h.inst);
+        let maddr = hdr(H_MAT) + MAT_WORDS * gw(hdr(H_INST_MAT) + h.inst);
+        let width = cone_width + cone_spread * h.t * length3(d);
+        var mat: Mat;
+        if (mat_has_maps(maddr)) {
+            mat = mat_textured(maddr, TexLookup(h.st, h.po, width * h.st_scale));
+        } else {
+            mat = mat_load(maddr);
+        }
         let wo = -d;
         if (mat_kind(mat) == M_EMISSIVE) {
             if (bounce == 0u) {
@@ -325,7 +374,7 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
                 let ml = hdr(H_MESHL) + MESHL_WORDS * li;
                 w = power_heuristic(prev_pdf, pdf_area_light(nq + li, gf(ml + MESHL_AREA), h.t, cos_l));
             }
-            l += beta * v3(mat + MAT_COLOR) * w;
+            l += beta * mat.color * w;
             break;
         }
         // Shading geometry.
@@ -341,7 +390,7 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
         }
         var etap = 1.0;
         if (mat_kind(mat) == M_DIELECTRIC) {
-            let ior = gf(mat + MAT_COLOR);
+            let ior = mat.color.x;
             etap = select(1.0 / ior, ior, front);
         }
         let frame = frame_new(ns);
@@ -419,6 +468,10 @@ fn trace_path(o0: vec3<f32>, d0: vec3<f32>, key: u32) -> PathResult {
         }
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
+        cone_width = width;
+        if (!bs.delta) {
+            cone_spread += BOUNCE_SPREAD;
+        }
         o = offset_origin(h.p, side(ng, wi));
         d = wi;
     }

@@ -246,6 +246,13 @@ impl SceneBvh {
         SceneHit { hit: h, instance }
     }
 
+    /// The object-space corners of instance `instance`'s triangle at `leaf` and their
+    /// `(u, v)`.
+    pub fn triangle(&self, instance: u32, leaf: u32) -> ([[f32; 3]; 3], [[f32; 2]; 3]) {
+        let m = &self.meshes[self.instances[instance as usize].mesh as usize];
+        (m.corners(leaf), m.corner_uvs(leaf))
+    }
+
     fn to_world_normal(&self, inst: &Instance, n: [f32; 3]) -> [f32; 3] {
         normalize(inst.normal_matrix.mul_vec3a(Vec3A::from(n)).into())
     }

@@ -262,6 +262,12 @@ shared_consts! {
     MAT_K: usize = 4;
     /// Material: GGX α.
     MAT_ALPHA: usize = 7;
+    /// Material: offset of its albedo map's texture record (`TEX_*`), or `NONE`.
+    MAT_ALBEDO_MAP: usize = 8;
+    /// Material: offset of its roughness map's texture record, or `NONE`.
+    MAT_ROUGHNESS_MAP: usize = 9;
+    /// Material: offset of its emission map's texture record, or `NONE`.
+    MAT_EMISSION_MAP: usize = 10;
     /// Kind: diffuse.
     M_DIFFUSE: u32 = 0;
     /// Kind: conductor with a complex IOR.
@@ -272,6 +278,28 @@ shared_consts! {
     M_DIELECTRIC: u32 = 3;
     /// Kind: emissive.
     M_EMISSIVE: u32 = 4;
+
+    // ---- Textures (`src/gpu/texture.rs`): a head, then one level record per pyramid level.
+    /// Texture: kind (`TEX_NOISE` or `TEX_IMAGE`).
+    TEX_KIND: usize = 0;
+    /// Texture: noise frequency (`f32`).
+    TEX_FREQUENCY: usize = 1;
+    /// Texture: number of pyramid levels (images).
+    TEX_LEVELS: usize = 2;
+    /// Texture: first level record (`LVL_WORDS` each, level 0 first).
+    TEX_LEVEL0: usize = 3;
+    /// Kind: procedural noise of the object-space point.
+    TEX_NOISE: u32 = 0;
+    /// Kind: a mip pyramid of linear RGB `f32` texels.
+    TEX_IMAGE: u32 = 1;
+    /// Words per level record.
+    LVL_WORDS: usize = 3;
+    /// Level: width in texels.
+    LVL_WIDTH: usize = 0;
+    /// Level: height in texels.
+    LVL_HEIGHT: usize = 1;
+    /// Level: offset of its texels (rgb, row by row from the top).
+    LVL_TEXELS: usize = 2;
 
     // ---- Lights.
     /// Words per quad light.
@@ -357,6 +385,12 @@ shared_consts! {
     /// Per-mesh record: offset of the corner normals of its loose triangles (`TRI_WORDS`
     /// each).
     MX_LOOSE_NORMALS: usize = 1;
+    /// Per-mesh record: offset of the texture coordinates of its blocks' vertices (2 words
+    /// each, in the normals' order), or `NONE` when no map reads them.
+    MX_ST: usize = 2;
+    /// Per-mesh record: offset of the corner texture coordinates of its loose triangles (6
+    /// words each), or `NONE`.
+    MX_LOOSE_ST: usize = 3;
 
     // ---- Sample dimensions of the counter-based RNG (the CPU renderer's).
     /// Pixel jitter in x.
@@ -393,6 +427,7 @@ shared_consts! {
 pub const F32_CONSTANTS: &[(&str, f32)] = &[
     ("PI", std::f32::consts::PI),
     ("DELTA_ALPHA", crate::render::material::DELTA_ALPHA),
+    ("BOUNCE_SPREAD", crate::render::texturing::BOUNCE_SPREAD),
 ];
 
 // The node words the kernels read are where obvhs keeps those fields.
@@ -414,7 +449,12 @@ const _: () = {
     assert!(H_MESH_EXTRA < H_CAMERA);
     assert!(ACC_OVERFLOW < ACC_WORDS && HIT_ITERS < HIT_WORDS && RAY_TMAX < RAY_WORDS);
     assert!(QUAD_RADIANCE + 3 <= QUAD_WORDS && MESHL_DIST < MESHL_WORDS);
-    assert!(MAT_ALPHA < MAT_WORDS && XF_NORMAL + 9 <= XF_WORDS && ENV_DIST < ENV_MAP_WORDS);
+    assert!(
+        MAT_EMISSION_MAP < MAT_WORDS
+            && MX_LOOSE_ST < MESH_EXTRA_WORDS
+            && XF_NORMAL + 9 <= XF_WORDS
+            && ENV_DIST < ENV_MAP_WORDS
+    );
 };
 
 /// Declares the `#[repr(C)]` uniform block and its WGSL twin, field for field.
@@ -523,8 +563,10 @@ pub mod kernels {
 
     /// The closest-hit module's parts, in order.
     pub const TRACE_MODULE: &[&str] = &[EXACT, BVH, TRACE];
+    /// Texture maps of the path tracer.
+    pub const TEXTURE: &str = include_str!("../../kernels/texture.wgsl");
     /// The path tracer's parts, in order.
-    pub const PATH_MODULE: &[&str] = &[EXACT, BVH, SAMPLING, MATERIAL, PATH];
+    pub const PATH_MODULE: &[&str] = &[EXACT, BVH, SAMPLING, TEXTURE, MATERIAL, PATH];
     /// The edge-function test module's parts, in order.
     pub const EXACT_TEST_MODULE: &[&str] = &[EXACT, EXACT_TEST];
 

@@ -10,7 +10,8 @@
 //! Modules: [`device`] (adapter choice, device, error scopes), [`layout`] (every word layout
 //! shared with the kernels, defined once; the WGSL prelude), [`geometry`] (the scene as
 //! words over several storage bindings), [`trace`] (closest hits, `trace --backend gpu`),
-//! [`render`] (the path tracer, `render --backend gpu`), [`exact`] (the exact edge function,
+//! [`render`] (the path tracer, `render --backend gpu`), [`texture`] (its texture maps and
+//! texture coordinates), [`exact`] (the exact edge function,
 //! for tests), [`cli`] (command-line pieces).
 
 pub mod device;
@@ -18,6 +19,7 @@ pub mod exact;
 pub mod geometry;
 pub mod layout;
 pub mod render;
+pub mod texture;
 pub mod trace;
 
 pub use device::{adapters, context_for_tests, GpuContext};

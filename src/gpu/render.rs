@@ -59,7 +59,8 @@ fn put_v3(rec: &mut [u32], at: usize, v: glam::Vec3) {
     rec[at..at + 3].copy_from_slice(&[f(v.x), f(v.y), f(v.z)]);
 }
 
-fn here(w: &[u32]) -> Result<u32> {
+/// The next word's offset, or an error when the render block outgrows 32-bit offsets.
+pub(super) fn here(w: &[u32]) -> Result<u32> {
     u32::try_from(w.len())
         .map_err(|_| Error::new(ErrorKind::Gpu, "scene too large for the GPU backend"))
 }
@@ -92,20 +93,10 @@ fn push_dist2(w: &mut Vec<u32>, d: &Distribution2D) -> Result<u32> {
     Ok(at)
 }
 
-/// The scene's geometry words followed by the render block (camera, materials, lights,
-/// environment, shading normals, instance transforms); returns the words and the block's
-/// offset.
+/// The scene's geometry words followed by the render block (camera, texture maps, materials,
+/// lights, environment, shading normals, texture coordinates, instance transforms); returns
+/// the words and the block's offset.
 pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
-    if let Some(i) = world.instance_maps.iter().position(Option::is_some) {
-        return Err(Error::new(
-            ErrorKind::Gpu,
-            format!(
-                "instance {i}'s material has texture maps (albedo_map, roughness_map or \
-                 emission_map), which the GPU path tracer does not read yet: render the scene \
-                 on the CPU (displacement maps are fine: they are applied at dicing)"
-            ),
-        ));
-    }
     let mut packed = PackedScene::from_scene(&world.scene)?;
     let w = &mut packed.words;
     let r = here(w)? as usize;
@@ -118,10 +109,20 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
     hdr[H_SPP] = st.spp;
     hdr[H_MAX_DEPTH] = st.max_depth;
     hdr[H_SEED] = st.seed;
-    // Materials.
+    // Texture maps, then the materials.
+    if world.textures.len() != world.materials.len() {
+        return Err(Error::new(
+            ErrorKind::Gpu,
+            "world has texture maps for only some materials",
+        ));
+    }
+    let maps = super::texture::pack_material_maps(w, &world.textures)?;
     hdr[H_MAT] = here(w)?;
-    for m in &world.materials {
+    for (m, maps) in world.materials.iter().zip(maps) {
         let mut rec = [0u32; MAT_WORDS];
+        rec[MAT_ALBEDO_MAP] = maps[0];
+        rec[MAT_ROUGHNESS_MAP] = maps[1];
+        rec[MAT_EMISSION_MAP] = maps[2];
         match *m {
             Material::Diffuse { albedo } => {
                 rec[MAT_KIND] = M_DIFFUSE;
@@ -272,11 +273,14 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
         }
         normals.push((at, loose_at));
     }
+    let st = super::texture::pack_mesh_st(w, world)?;
     hdr[H_MESH_EXTRA] = here(w)?;
-    for (n, l) in normals {
+    for ((n, l), (s, ls)) in normals.into_iter().zip(st) {
         let mut rec = [0u32; MESH_EXTRA_WORDS];
         rec[MX_NORMALS] = n;
         rec[MX_LOOSE_NORMALS] = l;
+        rec[MX_ST] = s;
+        rec[MX_LOOSE_ST] = ls;
         w.extend_from_slice(&rec);
     }
     // Camera.

@@ -638,6 +638,17 @@ impl GridMesh {
         }
     }
 
+    /// The `(u, v)` at the corners of the triangle at `leaf`, as its hits interpolate them.
+    pub fn corner_uvs(&self, leaf: u32) -> [[f32; 2]; 3] {
+        match Found::of(leaf) {
+            Found::Grid(bi, x, y, h) => {
+                let b = &self.blocks[bi as usize];
+                grid_corners(x as usize, y as usize, h as usize).map(|(cx, cy)| b.uv(cx, cy))
+            }
+            Found::Loose(li) => self.loose[li as usize].uv,
+        }
+    }
+
     /// The unit shading normals at the corners of the triangle at `leaf` (decoded).
     pub fn corner_normals(&self, leaf: u32) -> [[f32; 3]; 3] {
         match Found::of(leaf) {

@@ -187,7 +187,8 @@ impl World {
             let textured;
             let mat = match &self.instance_maps[h.instance as usize] {
                 Some(maps) => {
-                    let at = maps.lookup(&h.hit, self.hit_point(&h), width);
+                    let (corners, uvs) = self.scene.triangle(h.instance, h.hit.leaf);
+                    let at = maps.lookup(&h.hit, self.hit_point(&h), width, corners, uvs);
                     textured = self.textures[mi].apply(self.materials[mi], &at);
                     &textured
                 }

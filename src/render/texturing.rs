@@ -5,8 +5,9 @@
 //!
 //! Footprint: a cone around each path, `pixel angle · distance` wide on camera rays (the
 //! camera's angle per pixel), widened by 0.1 radian at each non-specular bounce; the width in
-//! texture units is the world width times `sqrt(|∂st/∂u × ∂st/∂v| / |∂P/∂u × ∂P/∂v|)`, the
-//! local scale of the texture map on the limit surface.
+//! texture units is the world width times the square root of texture area per world area
+//! (`|∂st/∂u × ∂st/∂v|` at the hit times the hit triangle's `(u, v)` area over its world
+//! area), the local scale of the texture map on the surface.
 
 use super::material::Material;
 use super::scene::{MapDesc, MaterialMaps};
@@ -14,7 +15,6 @@ use crate::bvh::Hit;
 use crate::coord::FaceCoord;
 use crate::error::Result;
 use crate::patch::uv::UvSurface;
-use crate::patch::PatchTable;
 use crate::texture::image::ColorSpace;
 use crate::texture::Texture;
 use glam::{Affine3A, Vec3};
@@ -121,12 +121,10 @@ pub struct Lookup {
     pub footprint: f32,
 }
 
-/// What an instance needs to address its maps: its limit surface (for the surface's scale),
-/// its limit texture coordinates (none on a mesh without them) and its transform.
+/// What an instance needs to address its maps: its limit texture coordinates (none on a mesh
+/// without them) and its transform.
 #[derive(Debug)]
 pub struct InstanceMaps {
-    /// The mesh's patch table.
-    pub table: Arc<PatchTable>,
     /// Limit texture coordinates.
     pub uv: Option<Arc<UvSurface>>,
     /// Object to world.
@@ -136,36 +134,43 @@ pub struct InstanceMaps {
 }
 
 impl InstanceMaps {
-    /// The lookup at `hit` (world point `p`) for a cone `width` wide there.
-    pub fn lookup(&self, hit: &Hit, p: Vec3, width: f32) -> Lookup {
+    /// The lookup at `hit` (world point `p`) for a cone `width` wide there; `corners` and
+    /// `uvs` are the hit triangle's object-space corners and their `(u, v)`.
+    ///
+    /// The texture coordinates are the exact limit values at the hit. The surface's scale
+    /// comes from the triangle: `|∂st/∂u × ∂st/∂v|` at the hit times the triangle's area in
+    /// `(u, v)` over its world-space area, the texture area per world area the GPU path tracer
+    /// measures from its vertices' texture coordinates (`src/gpu/texture.rs`).
+    pub fn lookup(
+        &self,
+        hit: &Hit,
+        p: Vec3,
+        width: f32,
+        corners: [[f32; 3]; 3],
+        uvs: [[f32; 2]; 3],
+    ) -> Lookup {
         let at = FaceCoord::new(
             hit.face,
             hit.k,
             (hit.u as f64).clamp(0.0, 1.0),
             (hit.v as f64).clamp(0.0, 1.0),
         );
-        let (st, su, sv) = match self.uv.as_ref().map(|uv| uv.eval(at)) {
-            Some(Ok(s)) => (s.st, s.du, s.dv),
-            Some(Err(_)) => ([at.u, at.v], [0.0; 2], [0.0; 2]),
-            None => ([at.u, at.v], [1.0, 0.0], [0.0, 1.0]),
+        let (st, st_density) = match self.uv.as_ref().map(|uv| uv.eval(at)) {
+            Some(Ok(s)) => (s.st, (s.du[0] * s.dv[1] - s.du[1] * s.dv[0]).abs()),
+            Some(Err(_)) => ([at.u, at.v], 0.0),
+            None => ([at.u, at.v], 1.0),
         };
-        let st_area = (su[0] * sv[1] - su[1] * sv[0]).abs();
-        let footprint = match self.table.eval(at) {
-            Ok(s) => {
-                let du = self
-                    .to_world
-                    .transform_vector3(Vec3::from(s.du.map(|x| x as f32)));
-                let dv = self
-                    .to_world
-                    .transform_vector3(Vec3::from(s.dv.map(|x| x as f32)));
-                let area = du.cross(dv).length() as f64;
-                if area > 0.0 && area.is_finite() {
-                    width * (st_area / area).sqrt() as f32
-                } else {
-                    0.0
-                }
-            }
-            Err(_) => 0.0,
+        let [a, b, c] = corners.map(Vec3::from);
+        let e1 = self.to_world.transform_vector3(b - a);
+        let e2 = self.to_world.transform_vector3(c - a);
+        let area = e1.cross(e2).length() as f64;
+        let d1 = [uvs[1][0] - uvs[0][0], uvs[1][1] - uvs[0][1]];
+        let d2 = [uvs[2][0] - uvs[0][0], uvs[2][1] - uvs[0][1]];
+        let uv_area = (d1[0] * d2[1] - d1[1] * d2[0]).abs() as f64;
+        let footprint = if area > 0.0 && area.is_finite() {
+            width * (st_density * uv_area / area).sqrt() as f32
+        } else {
+            0.0
         };
         let q = self.to_object.transform_point3(p);
         Lookup {

@@ -429,7 +429,6 @@ impl World {
             let maps = &textures[m.material];
             instance_maps.push((!maps.is_empty()).then(|| {
                 Arc::new(InstanceMaps {
-                    table: tables[table_of[i]].clone(),
                     uv: uv_of_table[table_of[i]].clone(),
                     to_world: m.transform,
                     to_object: m.transform.inverse(),

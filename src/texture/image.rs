@@ -451,6 +451,13 @@ impl ImageTexture {
         self.levels.len()
     }
 
+    /// Level `i` of the pyramid (`i < levels()`): width, height and its texels, row by row
+    /// from the top of the image (what the GPU path tracer uploads).
+    pub fn level(&self, i: usize) -> (usize, usize, &[[f32; 3]]) {
+        let l = &self.levels[i];
+        (l.width, l.height, &l.texels)
+    }
+
     /// Bytes held by the texture (texel arrays and level table).
     pub fn bytes(&self) -> usize {
         std::mem::size_of::<Self>()
