@@ -50,6 +50,10 @@ pub struct BenchArgs {
     /// Print JSON instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Displace both engines' surfaces by `noise:AMPLITUDE:FREQUENCY` (limitray's dicing and
+    /// Embree's displacement callback evaluate the same noise at the limit point).
+    #[arg(long, value_name = "SPEC")]
+    pub displace: Option<String>,
 }
 
 /// Runs `limitray crosscheck`: prints the agreement figures (text, or JSON with `--json`).
@@ -130,6 +134,25 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         reps: args.reps,
         leak_rays: args.leak_rays,
         seed: args.seed,
+        displace: match &args.displace {
+            None => None,
+            Some(spec) => match crate::dice::Displacement::parse(spec) {
+                Ok(crate::dice::Displacement::Noise {
+                    amplitude,
+                    frequency,
+                }) => Some((amplitude, frequency)),
+                Err(e) if spec.starts_with("noise:") => return Err(e),
+                _ => {
+                    return Err(Error::new(
+                        ErrorKind::Usage,
+                        format!(
+                            "--displace {spec:?}: bench takes noise:AMPLITUDE:FREQUENCY only \
+                             (Embree's side evaluates the noise in its displacement callback)"
+                        ),
+                    ))
+                }
+            },
+        },
     };
     let r = bench(&mesh, &opts)?;
     if args.json {

@@ -11,11 +11,11 @@
 
 use super::crosscheck::embree_table;
 use super::rays::{self, LeakTarget, TestRay};
-use super::subdiv::{check_rate, subdivision_scene};
+use super::subdiv::{check_rate, subdivision_scene_noise};
 use super::triangles::triangle_scene;
 use super::{Device, Scene, SceneOptions};
 use crate::bvh::{MeshBvh, Ray, Ray64};
-use crate::dice::{dice, DiceOptions, DiceRate};
+use crate::dice::{dice, DiceOptions, DiceRate, Displacement};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::ExactTracer;
 use crate::grid::GridMesh;
@@ -42,6 +42,12 @@ pub struct BenchOptions {
     pub leak_rays: usize,
     /// Seed of the random rays.
     pub seed: u64,
+    /// Noise displacement `(amplitude, frequency)` of both engines' surfaces: limitray's
+    /// dicing ([`crate::dice::Displacement::Noise`]) and Embree's displacement callback
+    /// ([`super::subdiv::subdivision_geometry_noise`]); the triangle scenes take limitray's
+    /// displaced triangles, and the reference intersector (undisplaced surfaces only) is left
+    /// out.
+    pub displace: Option<(f64, f64)>,
 }
 
 impl Default for BenchOptions {
@@ -53,6 +59,7 @@ impl Default for BenchOptions {
             reps: 3,
             leak_rays: 100_000,
             seed: 1,
+            displace: None,
         }
     }
 }
@@ -143,6 +150,7 @@ impl BenchReport {
                     "rays": self.options.rays,
                     "threads": self.options.threads,
                     "reps": self.options.reps,
+                    "displace": self.options.displace.map(|(a, f)| [a, f]),
                     "camera": [self.camera.0, self.camera.1],
                     "far_offset": FAR_OFFSET,
                     "embree_version": self.embree_version,
@@ -165,6 +173,11 @@ impl BenchReport {
             self.options.reps,
             self.embree_version
         );
+        if let Some((a, f)) = self.options.displace {
+            s.push_str(&format!(
+                "displaced by noise: amplitude {a}, frequency {f} (both engines)\n"
+            ));
+        }
         s.push_str(&format!(
             "{:<18} {:>10} {:>14} {:>14} {:>12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>11}\n",
             "engine",
@@ -476,7 +489,12 @@ struct Limitray {
     parts: [Vec<f64>; 4],
 }
 
-fn build_limitray(mesh: &ControlMesh, rate: u32, reps: usize) -> Result<Limitray> {
+fn build_limitray(
+    mesh: &ControlMesh,
+    rate: u32,
+    reps: usize,
+    displace: Option<(f64, f64)>,
+) -> Result<Limitray> {
     let mut parts: [Vec<f64>; 4] = Default::default();
     let mut last: Option<(GridMesh, MeshBvh)> = None;
     for _ in 0..reps.max(1) {
@@ -490,6 +508,10 @@ fn build_limitray(mesh: &ControlMesh, rate: u32, reps: usize) -> Result<Limitray
             mesh,
             &DiceOptions {
                 rate: DiceRate::Uniform(rate),
+                displace: displace.map(|(amplitude, frequency)| Displacement::Noise {
+                    amplitude,
+                    frequency,
+                }),
                 ..DiceOptions::default()
             },
         )?;
@@ -527,6 +549,7 @@ fn build_embree(
     rate: u32,
     device: &Device,
     reps: usize,
+    displace: Option<(f64, f64)>,
 ) -> Result<Embree> {
     let mut parts: [Vec<f64>; 3] = Default::default();
     let mut bytes = [0usize; 3];
@@ -538,12 +561,13 @@ fn build_embree(
         let tris = triangle_scene(device, diced, SceneOptions::default())?;
         let t1 = Instant::now();
         let m1 = device.memory_bytes();
-        let sub = subdivision_scene(
+        let sub = subdivision_scene_noise(
             device,
             mesh,
             mesh.options.boundary,
             rate as f32,
             SceneOptions::default(),
+            displace,
         )?;
         let t2 = Instant::now();
         let m2 = device.memory_bytes();
@@ -625,7 +649,7 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
 
     // limitray first, before Embree has started any worker threads, so that nothing of
     // Embree's runs during limitray's measurements.
-    let lr = build_limitray(mesh, opts.rate, opts.reps)?;
+    let lr = build_limitray(mesh, opts.rate, opts.reps, opts.displace)?;
     let targets = leak_targets(mesh, &lr.tris, opts.seed);
     let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
     let p = &lr.parts;
@@ -658,7 +682,14 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     let triangles = lr.tris.diced.triangles.len();
 
     let device = Device::with_threads(opts.threads)?;
-    let em = build_embree(mesh, &lr.tris.diced, opts.rate, &device, opts.reps)?;
+    let em = build_embree(
+        mesh,
+        &lr.tris.diced,
+        opts.rate,
+        &device,
+        opts.reps,
+        opts.displace,
+    )?;
     drop(lr);
     let names = ["embree-triangles", "embree-subdiv", "embree-tri-robust"];
     let engines: [&dyn Engine; 3] = [&em.tris, &em.sub, &em.robust];
@@ -674,8 +705,9 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         ));
     }
     drop(em);
-    // The reference intersector on the same rays (it does not depend on the rate).
-    {
+    // The reference intersector on the same rays (it does not depend on the rate; it traces
+    // undisplaced surfaces only).
+    if opts.displace.is_none() {
         let (exact, table_s, pieces_s) = build_exact(mesh, opts.reps)?;
         results.push(measure(
             "limitray-exact",
@@ -695,20 +727,29 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
             p[k] += FAR_OFFSET[k];
         }
     }
-    let far_lr = build_limitray(&far, opts.rate, 1)?;
+    let far_lr = build_limitray(&far, opts.rate, 1, opts.displace)?;
     let far_targets = leak_targets(&far, &far_lr.tris, opts.seed);
     let far_rays = rays::towards_points(&far_targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
     results[0].leaks_far = leaks(&far_lr.grid, &far_rays);
     results[1].leaks_far = leaks(&far_lr.tris, &far_rays);
-    let far_em = build_embree(&far, &far_lr.tris.diced, opts.rate, &device, 1)?;
+    let far_em = build_embree(
+        &far,
+        &far_lr.tris.diced,
+        opts.rate,
+        &device,
+        1,
+        opts.displace,
+    )?;
     drop(far_lr);
     let far_engines: [&dyn Engine; 3] = [&far_em.tris, &far_em.sub, &far_em.robust];
     for (r, engine) in results[2..5].iter_mut().zip(far_engines) {
         r.leaks_far = leaks(engine, &far_rays);
     }
     drop(far_em);
-    let (far_exact, _, _) = build_exact(&far, 1)?;
-    results[5].leaks_far = leaks(&far_exact, &far_rays);
+    if let Some(r) = results.get_mut(5) {
+        let (far_exact, _, _) = build_exact(&far, 1)?;
+        r.leaks_far = leaks(&far_exact, &far_rays);
+    }
     Ok(BenchReport {
         faces: mesh.num_faces(),
         triangles,

@@ -167,6 +167,43 @@ pub type RTCMemoryMonitorFunction =
 pub type RTCErrorFunction =
     Option<unsafe extern "C" fn(user_ptr: *mut c_void, code: u32, message: *const c_char)>;
 
+/// `struct RTCDisplacementFunctionNArguments`: `n` points of a subdivision face to displace in
+/// place (`P` in, displaced `P` out), with their `(u, v)` and the limit surface's normal `Ng`
+/// (not normalised).
+#[repr(C)]
+pub struct RTCDisplacementFunctionNArguments {
+    /// The geometry's user data (`rtcSetGeometryUserData`).
+    pub geometry_user_ptr: *mut c_void,
+    /// The geometry.
+    pub geometry: RTCGeometry,
+    /// The face.
+    pub prim_id: u32,
+    /// Motion-blur time step.
+    pub time_step: u32,
+    /// `u` of each point.
+    pub u: *const f32,
+    /// `v` of each point.
+    pub v: *const f32,
+    /// Normal x of each point.
+    pub ng_x: *const f32,
+    /// Normal y of each point.
+    pub ng_y: *const f32,
+    /// Normal z of each point.
+    pub ng_z: *const f32,
+    /// Position x of each point (displaced in place).
+    pub p_x: *mut f32,
+    /// Position y of each point.
+    pub p_y: *mut f32,
+    /// Position z of each point.
+    pub p_z: *mut f32,
+    /// Number of points.
+    pub n: u32,
+}
+
+/// `RTCDisplacementFunctionN`: `void (*)(const struct RTCDisplacementFunctionNArguments*)`.
+pub type RTCDisplacementFunctionN =
+    Option<unsafe extern "C" fn(args: *const RTCDisplacementFunctionNArguments)>;
+
 /// Opaque `struct RTCIntersectArguments` / `RTCOccludedArguments`; limitray always passes
 /// null (Embree's defaults).
 #[repr(C)]
@@ -193,6 +230,8 @@ const _: () = {
     assert!(std::mem::size_of::<RTCInterpolateArguments>() == 88);
     assert!(std::mem::offset_of!(RTCInterpolateArguments, P) == 32);
     assert!(std::mem::offset_of!(RTCInterpolateArguments, valueCount) == 80);
+    assert!(std::mem::offset_of!(RTCDisplacementFunctionNArguments, u) == 24);
+    assert!(std::mem::offset_of!(RTCDisplacementFunctionNArguments, n) == 88);
 };
 
 extern "C" {
@@ -230,6 +269,11 @@ extern "C" {
     pub fn rtcSetGeometryTessellationRate(geometry: RTCGeometry, rate: f32);
     pub fn rtcSetGeometrySubdivisionMode(geometry: RTCGeometry, topology: u32, mode: u32);
     pub fn rtcSetGeometryBuildQuality(geometry: RTCGeometry, quality: u32);
+    pub fn rtcSetGeometryUserData(geometry: RTCGeometry, user: *mut c_void);
+    pub fn rtcSetGeometryDisplacementFunction(
+        geometry: RTCGeometry,
+        displacement: RTCDisplacementFunctionN,
+    );
 
     pub fn rtcIntersect1(scene: RTCScene, rayhit: *mut RTCRayHit, args: *mut RTCIntersectArguments);
     pub fn rtcOccluded1(scene: RTCScene, ray: *mut RTCRay, args: *mut RTCOccludedArguments);

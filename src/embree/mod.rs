@@ -183,6 +183,9 @@ impl Device {
 pub struct Geometry {
     device: Device,
     raw: ffi::RTCGeometry,
+    /// What the geometry's user-data pointer points at (a displacement's parameters), kept
+    /// as long as the geometry: scenes hold their geometries.
+    user: Option<Box<[f64; 2]>>,
 }
 
 impl Drop for Geometry {
@@ -207,7 +210,23 @@ impl Geometry {
         Ok(Geometry {
             device: device.clone(),
             raw,
+            user: None,
         })
+    }
+
+    /// Sets Embree's displacement callback `f` with `params` as the geometry's user data
+    /// (owned by the geometry, so valid for every scene build that uses it).
+    pub fn set_displacement(
+        &mut self,
+        params: Box<[f64; 2]>,
+        f: unsafe extern "C" fn(*const ffi::RTCDisplacementFunctionNArguments),
+    ) {
+        let user = self.user.insert(params);
+        // SAFETY: valid geometry; the pointer stays valid while `self.user` holds the box.
+        unsafe {
+            ffi::rtcSetGeometryUserData(self.raw, user.as_mut_ptr() as *mut std::ffi::c_void);
+            ffi::rtcSetGeometryDisplacementFunction(self.raw, Some(f));
+        }
     }
 
     /// The raw handle (valid while this geometry or a scene holding it lives).

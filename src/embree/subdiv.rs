@@ -114,6 +114,59 @@ pub fn subdivision_geometry_with_mode(
     mode: u32,
     rate: f32,
 ) -> Result<Geometry> {
+    build(device, mesh, mode, rate, None)
+}
+
+/// [`subdivision_geometry`] displaced by Embree itself (`rtcSetGeometryDisplacementFunction`)
+/// by limitray's noise displacement ([`crate::dice::Displacement::Noise`]):
+/// `amplitude · noise(frequency · P)` along the unit limit normal, `P` the limit point Embree
+/// evaluates. Embree applies it to its grid vertices during the scene build, so the build time
+/// includes it (the peer of `dice --displace noise:…`).
+pub fn subdivision_geometry_noise(
+    device: &Device,
+    mesh: &ControlMesh,
+    boundary: BoundaryInterpolation,
+    rate: f32,
+    amplitude: f64,
+    frequency: f64,
+) -> Result<Geometry> {
+    let noise = Some([amplitude, frequency]);
+    build(device, mesh, subdivision_mode(boundary), rate, noise)
+}
+
+/// Embree's displacement callback for [`subdivision_geometry_noise`].
+///
+/// # Safety
+/// Embree calls it with `n` valid points and the geometry's user data, a `[f64; 2]`
+/// (amplitude, frequency) that the geometry owns.
+unsafe extern "C" fn displace_noise(args: *const ffi::RTCDisplacementFunctionNArguments) {
+    // SAFETY: see the function's contract.
+    let a = unsafe { &*args };
+    let [amplitude, frequency] = unsafe { *(a.geometry_user_ptr as *const [f64; 2]) };
+    for i in 0..a.n as usize {
+        // SAFETY: index within the n points.
+        unsafe {
+            let n = [*a.ng_x.add(i), *a.ng_y.add(i), *a.ng_z.add(i)].map(f64::from);
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if !(len > 0.0 && len.is_finite()) {
+                continue;
+            }
+            let p = [*a.p_x.add(i), *a.p_y.add(i), *a.p_z.add(i)].map(f64::from);
+            let h = amplitude * crate::texture::noise::noise(p.map(|c| c * frequency)).0 / len;
+            *a.p_x.add(i) = (p[0] + h * n[0]) as f32;
+            *a.p_y.add(i) = (p[1] + h * n[1]) as f32;
+            *a.p_z.add(i) = (p[2] + h * n[2]) as f32;
+        }
+    }
+}
+
+fn build(
+    device: &Device,
+    mesh: &ControlMesh,
+    mode: u32,
+    rate: f32,
+    noise: Option<[f64; 2]>,
+) -> Result<Geometry> {
     mesh.validate()?;
     check_embree_limits(mesh)?;
     check_rate(rate)?;
@@ -201,6 +254,9 @@ pub fn subdivision_geometry_with_mode(
         ffi::rtcSetGeometrySubdivisionMode(g.raw(), 0, mode);
         ffi::rtcSetGeometryTessellationRate(g.raw(), rate);
     }
+    if let Some(params) = noise {
+        g.set_displacement(Box::new(params), displace_noise);
+    }
     device.check("subdivision parameters")?;
     g.commit()?;
     Ok(g)
@@ -214,7 +270,23 @@ pub fn subdivision_scene(
     rate: f32,
     options: SceneOptions,
 ) -> Result<Scene> {
-    let g = subdivision_geometry(device, mesh, boundary, rate)?;
+    subdivision_scene_noise(device, mesh, boundary, rate, options, None)
+}
+
+/// [`subdivision_scene`], displaced by `noise` (amplitude, frequency) when given
+/// ([`subdivision_geometry_noise`]).
+pub fn subdivision_scene_noise(
+    device: &Device,
+    mesh: &ControlMesh,
+    boundary: BoundaryInterpolation,
+    rate: f32,
+    options: SceneOptions,
+    noise: Option<(f64, f64)>,
+) -> Result<Scene> {
+    let g = match noise {
+        Some((a, f)) => subdivision_geometry_noise(device, mesh, boundary, rate, a, f)?,
+        None => subdivision_geometry(device, mesh, boundary, rate)?,
+    };
     let mut b = SceneBuilder::new(device, options)?;
     b.attach(g)?;
     b.commit()
