@@ -40,6 +40,40 @@ fn usage(message: String) -> PyErr {
     PyValueError::new_err(message)
 }
 
+/// The samples `(face[i], k[i], u[i], v[i])` of `eval` and `uv`: one length, indices that fit
+/// `u32`, finite parameters; errors name the sample.
+fn face_coords(
+    face: &PyReadonlyArray1<'_, i64>,
+    k: &PyReadonlyArray1<'_, i64>,
+    u: &PyReadonlyArray1<'_, f64>,
+    v: &PyReadonlyArray1<'_, f64>,
+) -> PyResult<Vec<FaceCoord>> {
+    let (face, k, u, v) = (face.as_slice()?, k.as_slice()?, u.as_slice()?, v.as_slice()?);
+    let n = face.len();
+    if k.len() != n || u.len() != n || v.len() != n {
+        return Err(usage(format!(
+            "face, k, u and v have different lengths ({n}, {}, {}, {})",
+            k.len(),
+            u.len(),
+            v.len()
+        )));
+    }
+    (0..n)
+        .map(|i| {
+            let index = |x: i64| {
+                u32::try_from(x).map_err(|_| usage(format!("sample {i}: invalid index '{x}'")))
+            };
+            if !u[i].is_finite() || !v[i].is_finite() {
+                return Err(usage(format!(
+                    "sample {i}: invalid parameter '{}'",
+                    if u[i].is_finite() { v[i] } else { u[i] }
+                )));
+            }
+            Ok(FaceCoord::new(index(face[i])?, index(k[i])?, u[i], v[i]))
+        })
+        .collect()
+}
+
 /// Largest number of segments on one edge when dicing (the CLI's `--max-rate` default).
 const MAX_RATE: u32 = 256;
 
@@ -246,33 +280,11 @@ impl Surface {
         u: PyReadonlyArray1<'py, f64>,
         v: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let face = face.as_slice()?.to_vec();
-        let k = k.as_slice()?.to_vec();
-        let u = u.as_slice()?.to_vec();
-        let v = v.as_slice()?.to_vec();
-        let n = face.len();
-        if k.len() != n || u.len() != n || v.len() != n {
-            return Err(usage(format!(
-                "face, k, u and v have different lengths ({n}, {}, {}, {})",
-                k.len(),
-                u.len(),
-                v.len()
-            )));
-        }
+        let at = face_coords(&face, &k, &u, &v)?;
+        let n = at.len();
         let out = py.detach(|| -> PyResult<Vec<f64>> {
             let mut out = Vec::with_capacity(9 * n);
-            for i in 0..n {
-                let index = |x: i64| {
-                    u32::try_from(x).map_err(|_| usage(format!("sample {i}: invalid index '{x}'")))
-                };
-                let (f, kk) = (index(face[i])?, index(k[i])?);
-                if !u[i].is_finite() || !v[i].is_finite() {
-                    return Err(usage(format!(
-                        "sample {i}: invalid parameter '{}'",
-                        if u[i].is_finite() { v[i] } else { u[i] }
-                    )));
-                }
-                let at = FaceCoord::new(f, kk, u[i], v[i]);
+            for (i, &at) in at.iter().enumerate() {
                 let s = if self.options.scheme == Scheme::Loop {
                     self.table.eval_triangle(at)
                 } else {
@@ -298,11 +310,8 @@ impl Surface {
         u: PyReadonlyArray1<'py, f64>,
         v: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (face, k, u, v) = (face.as_slice()?, k.as_slice()?, u.as_slice()?, v.as_slice()?);
-        let n = face.len();
-        if k.len() != n || u.len() != n || v.len() != n {
-            return Err(usage("face, k, u and v have different lengths".into()));
-        }
+        let at = face_coords(&face, &k, &u, &v)?;
+        let n = at.len();
         let uv = match self.uv.get() {
             Some(s) => s,
             None => {
@@ -320,11 +329,7 @@ impl Surface {
             ));
         };
         let mut out = Vec::with_capacity(6 * n);
-        for i in 0..n {
-            let index = |x: i64| {
-                u32::try_from(x).map_err(|_| usage(format!("sample {i}: invalid index '{x}'")))
-            };
-            let at = FaceCoord::new(index(face[i])?, index(k[i])?, u[i], v[i]);
+        for (i, &at) in at.iter().enumerate() {
             self.table
                 .eval(at)
                 .map_err(|e| usage(format!("sample {i}: {e}")))?;

@@ -47,6 +47,17 @@ def _floats(name, x, dtype, shape=None):
     return np.ascontiguousarray(a, dtype=dtype)
 
 
+def _samples(face, u, v, k):
+    """``(face, k, u, v)`` of :meth:`Surface.eval` and :meth:`Surface.uv`: checked, broadcast
+    to one length, contiguous."""
+    face = _indices("face", face)
+    n = face.shape[0]
+    k = np.zeros(n, dtype=np.int64) if k is None else _indices("k", k)
+    u = _floats("u", u, np.float64)
+    v = _floats("v", v, np.float64)
+    return tuple(np.ascontiguousarray(a) for a in np.broadcast_arrays(face, k, u, v))
+
+
 class Surface:
     """The exact limit surface of a control mesh read from an OBJ file (OpenSubdiv tags).
 
@@ -105,13 +116,7 @@ class Surface:
         arrays of one length N. Returns ``{"p", "du", "dv"}``, each float64 (N, 3): the
         position and the derivatives in the (sub-)face's parameterisation.
         """
-        face = _indices("face", face)
-        n = face.shape[0]
-        k = np.zeros(n, dtype=np.int64) if k is None else _indices("k", k)
-        u = _floats("u", u, np.float64)
-        v = _floats("v", v, np.float64)
-        face, k, u, v = (np.ascontiguousarray(a) for a in np.broadcast_arrays(face, k, u, v))
-        out = self._s.eval(face, k, u, v)
+        out = self._s.eval(*_samples(face, u, v, k))
         return {"p": out[:, 0:3], "du": out[:, 3:6], "dv": out[:, 6:9]}
 
     def uv(self, face, u, v, k=None):
@@ -121,13 +126,7 @@ class Surface:
         ``{"st", "du", "dv"}``, each float64 (N, 2): the coordinates and their derivatives in
         the (sub-)face's ``u`` and ``v``. A mesh without texture coordinates raises ValueError.
         """
-        face = _indices("face", face)
-        n = face.shape[0]
-        k = np.zeros(n, dtype=np.int64) if k is None else _indices("k", k)
-        u = _floats("u", u, np.float64)
-        v = _floats("v", v, np.float64)
-        face, k, u, v = (np.ascontiguousarray(a) for a in np.broadcast_arrays(face, k, u, v))
-        m = self._s.uv(face, k, u, v)
+        m = self._s.uv(*_samples(face, u, v, k))
         return {"st": m[:, 0:2], "du": m[:, 2:4], "dv": m[:, 4:6]}
 
     def trace(self, origins, directions, rate=16, exact=False):
