@@ -194,6 +194,27 @@ impl<'a> DisplacedSurface<'a> {
         Ok(self.d.apply_at(s, n, st))
     }
 
+    /// How many cells of the displacement's detail (noise lattice cells, or texels) the
+    /// longest edge of the parameter triangle `uv` of `(face, k)` crosses, measured at 9
+    /// points along each edge (what [`crate::harness::probe::displaced_triangle_error_bound`]
+    /// sizes its sampling by).
+    pub fn detail_across(&self, face: u32, k: u32, uv: [[f64; 2]; 3]) -> Result<f64> {
+        const N: usize = 8;
+        let mut most = 0.0f64;
+        for e in 0..3 {
+            let (a, b) = (uv[e], uv[(e + 1) % 3]);
+            let at = |t: f64| (k, a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t);
+            let plain = (0..=N)
+                .map(|i| {
+                    let (k, u, v) = at(i as f64 / N as f64);
+                    Ok(self.table.eval(FaceCoord::new(face, k, u, v))?.p)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            most = most.max(self.detail_along(face, &plain, &at)?);
+        }
+        Ok(most)
+    }
+
     /// How many cells of the displacement's detail (noise lattice cells, or texels along the
     /// image's larger side) the curve through `plain` (limit points at `points(i / (len - 1))`
     /// of face `f`) crosses.

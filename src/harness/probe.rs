@@ -185,19 +185,52 @@ pub fn triangle_error_bound(table: &PatchTable, d: &DicedMesh, tri: usize) -> f6
 }
 
 /// [`triangle_error_bound`] against any surface `point(at)` over the triangle's parameters
-/// (a displaced surface: [`crate::dice::DisplacedSurface::point`]).
+/// that is smooth at 1/16 of the triangle.
 pub fn triangle_error_bound_with(
     point: &dyn Fn(FaceCoord) -> Option<[f64; 3]>,
     d: &DicedMesh,
     tri: usize,
 ) -> f64 {
+    triangle_error_bound_order(point, d, tri, LATTICE)
+}
+
+/// Most samples per triangle edge of [`displaced_triangle_error_bound`] (8,385 points).
+const MAX_LATTICE: usize = 128;
+
+/// The dicing error bound of diced triangle `tri` against the displaced surface `s`: as
+/// [`triangle_error_bound`], on a lattice fine enough for the displacement's detail, four
+/// samples per noise cell or texel the triangle's longest edge crosses
+/// ([`crate::dice::DisplacedSurface::detail_across`]), at least 16 and at most 128 per edge.
+/// A displacement whose detail is finer than the triangle (an image of random texels at a low
+/// rate) is then sampled where it varies, not assumed smooth at 1/16 of the triangle.
+pub fn displaced_triangle_error_bound(
+    s: &crate::dice::DisplacedSurface,
+    d: &DicedMesh,
+    tri: usize,
+) -> f64 {
+    let info = &d.tri_info[tri];
+    let uv = info.uv.map(|p| [p[0] as f64, p[1] as f64]);
+    let detail = s.detail_across(info.face, info.k, uv).unwrap_or(0.0);
+    let order = (4.0 * detail)
+        .ceil()
+        .clamp(LATTICE as f64, MAX_LATTICE as f64) as usize;
+    triangle_error_bound_order(&|at| s.point(at).ok(), d, tri, order)
+}
+
+/// [`triangle_error_bound_with`] on the barycentric lattice of order `order`.
+pub fn triangle_error_bound_order(
+    point: &dyn Fn(FaceCoord) -> Option<[f64; 3]>,
+    d: &DicedMesh,
+    tri: usize,
+    order: usize,
+) -> f64 {
     let info = &d.tri_info[tri];
     let [a, b, c] = d.triangles[tri].map(|i| d.positions[i as usize].map(|x| x as f64));
     let uv = info.uv.map(|p| [p[0] as f64, p[1] as f64]);
     let mut worst = 0.0f64;
-    for i in 0..=LATTICE {
-        for j in 0..=LATTICE - i {
-            let (l1, l2) = (i as f64 / LATTICE as f64, j as f64 / LATTICE as f64);
+    for i in 0..=order {
+        for j in 0..=order - i {
+            let (l1, l2) = (i as f64 / order as f64, j as f64 / order as f64);
             let l0 = 1.0 - l1 - l2;
             let u = l0 * uv[0][0] + l1 * uv[1][0] + l2 * uv[2][0];
             let v = l0 * uv[0][1] + l1 * uv[1][1] + l2 * uv[2][1];
@@ -311,11 +344,13 @@ fn rays_from_above(d: &DicedMesh, n: usize, seed: u64, diag: f64) -> Vec<Ray> {
 
 /// The largest ratio, over `n` rays aimed at random diced triangles (as [`accuracy`] aims
 /// them), of a hit's distance from `point` at the hit's reported parameters over its
-/// triangle's error bound against `point` ([`triangle_error_bound_with`]) plus the rounding of
-/// an `f32` hit; and how many rays hit. For surfaces without a reference intersector
-/// (displaced ones): the hit parameters are as good as the dicing's own bound says.
+/// triangle's error bound `bound(triangle)` (against `point`: [`triangle_error_bound_with`],
+/// [`displaced_triangle_error_bound`]) plus the rounding of an `f32` hit; and how many rays
+/// hit. For surfaces without a reference intersector (displaced ones): the hit parameters are
+/// as good as the dicing's own bound says.
 pub fn bound_ratio(
     point: &(dyn Fn(FaceCoord) -> Option<[f64; 3]> + Sync),
+    bound: &(dyn Fn(usize) -> f64 + Sync),
     bvh: &MeshBvh,
     n: usize,
     seed: u64,
@@ -334,7 +369,7 @@ pub fn bound_ratio(
             let dir = ray.dir.map(|x| x as f64);
             let hp: [f64; 3] = std::array::from_fn(|k| o[k] + h.t as f64 * dir[k]);
             let p = point(FaceCoord::new(h.face, h.k, h.u as f64, h.v as f64))?;
-            let bound = triangle_error_bound_with(point, d, h.triangle as usize);
+            let bound = bound(h.triangle as usize);
             let mag = hp.iter().chain(&o).fold(0.0f64, |m, v| m.max(v.abs()));
             let slack = 8.0 * mag * f32::EPSILON as f64;
             Some(norm(sub(hp, p)) / (bound + slack))
