@@ -508,6 +508,20 @@ fn limitray_does_not_leak() {
     }
 }
 
+/// The JSON object on each line of a successful command's standard output.
+fn json_rows(out: std::process::Output) -> Vec<serde_json::Value> {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
 #[test]
 fn cli_crosscheck_and_bench() {
     let exe = env!("CARGO_BIN_EXE_limitray");
@@ -592,16 +606,7 @@ fn cli_crosscheck_and_bench() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let rows: Vec<serde_json::Value> = String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let rows = json_rows(out);
     let names: Vec<&str> = rows.iter().map(|r| r["engine"].as_str().unwrap()).collect();
     assert_eq!(
         names,
@@ -680,16 +685,7 @@ fn cli_crosscheck_and_bench() {
             .unwrap()
     };
     let out = displaced("noise:0.05:3");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let rows: Vec<serde_json::Value> = String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let rows = json_rows(out);
     assert_eq!(rows.len(), 5, "{rows:?}");
     assert_eq!(rows[3]["engine"], "embree-subdiv");
     assert_eq!(rows[0]["displace"], serde_json::json!([0.05, 3.0]));
