@@ -1,7 +1,8 @@
 //! The factory of a patch table: every base face (every sub-face of an n-gon) becomes the root
-//! of a quadtree; regular faces become leaf patches, irregular ones are refined level by level
-//! on the union of their two-ring cut-outs, and what is still irregular at the maximum level
-//! becomes an end cap (`end_cap`).
+//! of a quadtree; regular faces become leaf patches, quads with one smooth extraordinary
+//! corner become Stam patches (`stam`) at the first level where they are one, other irregular
+//! faces are refined level by level on the union of their two-ring cut-outs, and what is still
+//! irregular at the maximum level becomes a Stam patch or an end cap (`end_cap`).
 
 use super::end_cap::{CapMesh, CapNode};
 use super::tree::{Frame, Node};
@@ -78,6 +79,34 @@ impl PatchTable {
         self.nodes[slot as usize] = Node::Leaf((self.patches.len() - 1) as u32);
     }
 
+    /// Makes node `slot` a Stam patch at `depth`: extraordinary corner `corner`, control
+    /// points `verts` (indices into the table's refined vertices, [`stam::gather`]'s order).
+    fn add_stam(&mut self, slot: u32, corner: usize, verts: &[u32], depth: usize) {
+        let valence = (verts.len() - 8) / 2;
+        if self.stam.len() <= valence {
+            self.stam.resize(valence + 1, None);
+        }
+        if self.stam[valence].is_none() {
+            self.stam[valence] = Some(stam::basis(valence));
+        }
+        let first = self.point_stencils.len() as u32;
+        for &v in verts {
+            self.point_stencils.push_terms(&[(v, 1.0)]);
+        }
+        self.add_leaf(
+            slot,
+            Patch {
+                kind: PatchKind::Stam {
+                    valence: valence as u8,
+                    corner: corner as u8,
+                },
+                level: depth as u8,
+                first_point: first,
+                ..Patch::UNSET
+            },
+        );
+    }
+
     fn new_node(&mut self, face: u32, sub: u8, frame: Frame) -> u32 {
         self.node_info.push((face, sub, frame));
         self.nodes.push(Node::Empty);
@@ -106,6 +135,15 @@ impl PatchTable {
         } else {
             classify(level, g, self.options.single_crease)
         };
+        if found.is_none() && !forced && self.use_stam {
+            // A quad with one smooth extraordinary corner is exact in constant time from its
+            // one-ring: no need to isolate it down to the maximum level.
+            if let Some((corner, verts)) = stam::gather(level, g) {
+                let verts: Vec<u32> = verts.iter().map(|&v| offset + v).collect();
+                self.add_stam(slot, corner, &verts, depth);
+                return None;
+            }
+        }
         if let Some((kind, cps)) = found {
             let first = self.point_stencils.len() as u32;
             for c in &cps {
@@ -148,30 +186,11 @@ impl PatchTable {
                 None
             };
             if let Some((corner, verts)) = found {
-                let valence = (verts.len() - 8) / 2;
-                if self.stam.len() <= valence {
-                    self.stam.resize(valence + 1, None);
-                }
-                if self.stam[valence].is_none() {
-                    self.stam[valence] = Some(stam::basis(valence));
-                }
-                let first = self.point_stencils.len() as u32;
-                for &v in &verts {
-                    self.point_stencils
-                        .push_terms(&[(child_offset + old[v as usize], 1.0)]);
-                }
-                self.add_leaf(
-                    node,
-                    Patch {
-                        kind: PatchKind::Stam {
-                            valence: valence as u8,
-                            corner: corner as u8,
-                        },
-                        level: depth as u8,
-                        first_point: first,
-                        ..Patch::UNSET
-                    },
-                );
+                let verts: Vec<u32> = verts
+                    .iter()
+                    .map(|&v| child_offset + old[v as usize])
+                    .collect();
+                self.add_stam(node, corner, &verts, depth);
                 continue;
             }
             // The cut-out's vertices become control points (once per level), and the cap keeps

@@ -6,7 +6,7 @@ use super::{Patch, PatchKind, PatchTable, Sample};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::bspline::{self, ControlGrid, PatchPoint};
-use crate::patch::single_crease;
+use crate::patch::{single_crease, stam};
 
 impl PatchTable {
     /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
@@ -127,13 +127,17 @@ impl PatchTable {
                     }
                     Node::Leaf(p) => {
                         let patch = &self.patches[p as usize];
-                        if matches!(
-                            patch.kind,
-                            PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. }
-                        ) {
-                            return Ok(patch.level);
+                        match patch.kind {
+                            PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. } => {
+                                return Ok(patch.level);
+                            }
+                            // How deep Stam's evaluation goes depends on (s, t) alone.
+                            PatchKind::Stam { corner, .. } => {
+                                let (_, s1, t1) = stam_corner(corner, s, t);
+                                return Ok(patch.level + stam::depth(s1, t1));
+                            }
+                            PatchKind::EndCap => break,
                         }
-                        break;
                     }
                     Node::Empty => break,
                 }
@@ -211,20 +215,28 @@ impl PatchTable {
                 let first = patch.first_point as usize;
                 let cps = &self.points[first..first + basis.size];
                 // The extraordinary vertex to (0, 0): (s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c].
-                let c = corner as usize;
-                let rot = Frame {
-                    o: CORNER[c],
-                    a: UAX[c],
-                    b: VAX[c],
-                };
-                let d = [s - CORNER[c][0], t - CORNER[c][1]];
-                let s1 = (d[0] * UAX[c][0] + d[1] * UAX[c][1]).clamp(0.0, 1.0);
-                let t1 = (d[0] * VAX[c][0] + d[1] * VAX[c][1]).clamp(0.0, 1.0);
+                let (rot, s1, t1) = stam_corner(corner, s, t);
                 let (pt, sub, depth) = basis.eval_local(cps, s1, t1);
                 (pt, Some(rot.then(&sub)), depth)
             }
         }
     }
+}
+
+/// Patch `(s, t)` in the frame of a Stam patch whose extraordinary vertex is at corner
+/// `corner`: the frame mapping the local square back to the patch, and the local `(s', t')`
+/// with the extraordinary vertex at `(0, 0)`: `(s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c]`.
+fn stam_corner(corner: u8, s: f64, t: f64) -> (Frame, f64, f64) {
+    let c = corner as usize;
+    let rot = Frame {
+        o: CORNER[c],
+        a: UAX[c],
+        b: VAX[c],
+    };
+    let d = [s - CORNER[c][0], t - CORNER[c][1]];
+    let s1 = (d[0] * UAX[c][0] + d[1] * UAX[c][1]).clamp(0.0, 1.0);
+    let t1 = (d[0] * VAX[c][0] + d[1] * VAX[c][1]).clamp(0.0, 1.0);
+    (rot, s1, t1)
 }
 
 #[cfg(test)]

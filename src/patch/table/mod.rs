@@ -78,8 +78,8 @@ pub enum PatchKind {
     },
     /// Irregular at the maximum level: subdivided on demand at evaluation.
     EndCap,
-    /// Irregular at the maximum level, a quad with one smooth extraordinary corner of
-    /// `valence` at its corner `corner` and regular, smooth surroundings: evaluated exactly in
+    /// A quad with one smooth extraordinary corner of `valence` at its corner `corner` and
+    /// regular, smooth surroundings, at the first level where it is one: evaluated exactly in
     /// constant time by Stam's method ([`crate::patch::stam`]) from `2·valence + 8` control
     /// points.
     Stam {
