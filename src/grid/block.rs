@@ -170,24 +170,29 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
     }
     let q = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).floor() as u32;
     let (qx, qy) = (q(x), q(y));
-    // Distance, not dot product: `1 − cos` of these angles is below `f32`'s resolution.
-    let mut best = (f64::INFINITY, 0);
+    // The largest cosine, in `f64` (`1 − cos` of these angles is below `f32`'s resolution),
+    // of the decoded direction before its normalisation: no square root per candidate.
+    let nd = n.map(f64::from);
+    // cos² with its sign, dot·|dot| / len², compared cross-multiplied (no division).
+    let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
     for dy in 0..2u32 {
         for dx in 0..2u32 {
             let code = (qx + dx).min(65535) | ((qy + dy).min(65535) << 16);
-            let m = oct_decode(code);
-            let d2: f64 = (0..3).map(|a| (m[a] as f64 - n[a] as f64).powi(2)).sum();
-            if d2 < best.0 {
-                best = (d2, code);
+            let w = oct_direction(code).map(f64::from);
+            let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
+            let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+            let num = dot * dot.abs();
+            if num * best_len2 > best_num * len2 {
+                (best_num, best_len2, best) = (num, len2, code);
             }
         }
     }
-    best.1
+    best
 }
 
-/// The unit vector of an octahedral code.
+/// The direction of an octahedral code before normalisation (on the octahedron).
 #[inline(always)]
-pub fn oct_decode(code: u32) -> [f32; 3] {
+fn oct_direction(code: u32) -> [f32; 3] {
     let f = |q: u32| (q as f32 / 65535.0) * 2.0 - 1.0;
     let (mut x, mut y) = (f(code & 0xFFFF), f(code >> 16));
     let z = 1.0 - x.abs() - y.abs();
@@ -196,7 +201,13 @@ pub fn oct_decode(code: u32) -> [f32; 3] {
         x = (1.0 - ay) * if x >= 0.0 { 1.0 } else { -1.0 };
         y = (1.0 - ax) * if y >= 0.0 { 1.0 } else { -1.0 };
     }
-    crate::bvh::mesh::normalize([x, y, z])
+    [x, y, z]
+}
+
+/// The unit vector of an octahedral code.
+#[inline(always)]
+pub fn oct_decode(code: u32) -> [f32; 3] {
+    crate::bvh::mesh::normalize(oct_direction(code))
 }
 
 #[cfg(test)]
