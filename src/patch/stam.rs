@@ -433,7 +433,7 @@ pub(crate) fn depth(s: f64, t: f64) -> u8 {
 }
 
 /// Sub-patch grids kept per thread by [`StamBasis::grid_recent`].
-const RECENT_SIZE: usize = 4;
+const RECENT_SIZE: usize = 16;
 
 /// One cached sub-patch: depth `m`, child `q`, the control points it was computed from.
 struct Recent {
