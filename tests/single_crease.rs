@@ -2,6 +2,8 @@
 //! uniformly refined meshes, and the paper's matrices against their definitions.
 #![allow(clippy::needless_range_loop)]
 
+mod common;
+
 use limitray::mesh::{generate, ControlMesh, CreaseMethod, MeshBuilder};
 use limitray::patch::bspline::{self, ControlGrid, Mat4, PatchPoint, IDENTITY};
 use limitray::patch::single_crease::{
@@ -449,4 +451,79 @@ fn transition_piece_is_the_sharply_refined_curve() {
             assert!(rel(&direct[1], &local_d) < 1e-10, "s = {s}, τ = {tau}");
         }
     }
+}
+
+/// Under Chaikin's crease rule, single-crease patches (made only where the crease continues
+/// with the same sharpness at both ends, where Chaikin's decrement is the uniform one) give the
+/// surface that isolating the creases by Chaikin refinement gives (that path is checked
+/// against OpenSubdiv Far in `tests/osd_oracle.rs`). Corpus shapes with constant and varying
+/// sharpness along their creases; positions agree within 1e-12 of the bounding-box diagonal
+/// (both are exact: B-spline and single-crease weights over the same control points, rounding
+/// ~1e-16 per level over at most 10 levels).
+#[test]
+fn chaikin_single_crease_patches_equal_isolation_by_subdivision() {
+    use limitray::coord::FaceCoord;
+    use limitray::mesh::obj::read_obj;
+    use limitray::patch::table::PatchKind;
+    use limitray::patch::{PatchOptions, PatchTable};
+    let Some(models) = common::shared_models() else {
+        eprintln!("skipped: ../shared/models is absent");
+        return;
+    };
+    let mut single_crease_patches = 0;
+    for name in [
+        "catmark_car",
+        "catmark_chaikin0",
+        "catmark_chaikin1",
+        "catmark_chaikin2",
+        "catmark_cube_creases1",
+        "catmark_torus_creases1",
+        "catmark_pyramid_creases1",
+    ] {
+        let mesh = read_obj(&models.join(format!("opensubdiv/{name}.obj"))).unwrap();
+        let options = limitray::mesh::Options {
+            crease_method: CreaseMethod::Chaikin,
+            ..mesh.options
+        };
+        let table = |single_crease| {
+            let opts = PatchOptions {
+                single_crease,
+                ..PatchOptions::default()
+            };
+            PatchTable::with_options(&mesh, options, opts).unwrap()
+        };
+        let (fast, refined) = (table(true), table(false));
+        let count = fast
+            .patches
+            .iter()
+            .filter(|p| matches!(p.kind, PatchKind::SingleCrease { .. }))
+            .count();
+        single_crease_patches += count;
+        let diag = mesh.diagonal();
+        let mut rng = limitray::harness::rng::SplitMix64::new(17);
+        let mut worst = 0f64;
+        for _ in 0..3000 {
+            let f = rng.below(fast.num_faces());
+            let k = rng.below(fast.sub_faces(f));
+            let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
+            let (Ok(a), Ok(b)) = (fast.eval(at), refined.eval(at)) else {
+                assert!(
+                    fast.eval(at).is_err() && refined.eval(at).is_err(),
+                    "{at:?}"
+                );
+                continue;
+            };
+            worst = worst.max(dist(&a.p, &b.p) / diag);
+        }
+        println!(
+            "{name}: {count} single-crease patches, {} against {} leaves, worst {worst:.2e}",
+            fast.patches.len(),
+            refined.patches.len()
+        );
+        assert!(
+            worst <= 1e-12,
+            "{name}: positions differ by {worst:e} of the diagonal"
+        );
+    }
+    assert!(single_crease_patches > 0, "no single-crease patch was made");
 }

@@ -69,9 +69,12 @@ fn reflect(grid: &[Option<Combo>; 16], on: usize, inside: usize) -> Combo {
 }
 
 /// Classifies face `f` of `level` and gathers its control points, or `None` when the face is
-/// irregular (needs more refinement). `single_crease` allows single-crease patches (uniform
-/// crease rule only: Chaikin's rule makes the crease's decrement depend on edges outside the
-/// patch).
+/// irregular (needs more refinement). `single_crease` allows single-crease patches: one
+/// semi-sharp edge, continued straight at both its ends by edges of the same sharpness, nothing
+/// else sharp at its ends. Under Chaikin's rule a child edge's sharpness is `¾ s + ¼ s' − 1`
+/// with `s'` that of the other sharp edge at its end: with `s' = s` this is the uniform rule's
+/// `s − 1`, and the same holds again for the children inside each sub-patch's support, so the
+/// single-crease patch is exact under both rules.
 pub fn classify(
     level: &Level,
     f: usize,

@@ -8,7 +8,7 @@ use super::end_cap::{CapMesh, CapNode};
 use super::tree::{Frame, Node};
 use super::{Patch, PatchKind, PatchOptions, PatchStats, PatchTable, MAX_LEVEL};
 use crate::error::{Error, ErrorKind, Result};
-use crate::mesh::{ControlMesh, CreaseMethod, Options, Scheme};
+use crate::mesh::{ControlMesh, Options, Scheme};
 use crate::patch::approx::{Approximation, QuadApprox, TriApprox};
 use crate::patch::local::{child_face, extract_faces};
 use crate::patch::regular::{classify, RegularKind};
@@ -267,7 +267,10 @@ impl PatchTable {
             ));
         }
         let opts = PatchOptions {
-            single_crease: opts.single_crease && method == CreaseMethod::Uniform,
+            // Chaikin's rule too: `classify` makes a single-crease patch only where the crease
+            // continues at both ends with the same sharpness and nothing else is sharp at its
+            // ends, where Chaikin's decrement is the uniform one at every level.
+            single_crease: opts.single_crease,
             max_level: opts.max_level.max(1).max(deepest + 1),
             surface: opts.surface,
         };

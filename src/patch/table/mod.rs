@@ -43,7 +43,7 @@ pub struct PatchOptions {
     /// Maximum isolation level.
     pub max_level: usize,
     /// Use single-crease patches (paper 000) for regular faces with one semi-sharp crease
-    /// (uniform crease rule only); otherwise such faces are refined like other features.
+    /// (under either crease rule); otherwise such faces are refined like other features.
     pub single_crease: bool,
     /// The surface the mesh stands for: exact, one of paper 002's approximations of a Loop
     /// surface, or (`Gregory` on a Catmull-Clark mesh) paper 004's Gregory patches
