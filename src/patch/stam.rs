@@ -383,53 +383,59 @@ impl StamBasis {
     pub(crate) fn eval_local(&self, cps: &[[f64; 3]], s: f64, t: f64) -> (PatchPoint, Frame, u8) {
         debug_assert_eq!(cps.len(), self.size);
         if s == 0.0 && t == 0.0 {
-            let eps = 2f64.powi(-10);
-            let (mut pt, frame, m) = self.eval_local(cps, eps, eps);
+            let (mut pt, frame, m) = self.eval_local(cps, CORNER_NUDGE, CORNER_NUDGE);
             pt.p = self.limit(cps);
             return (pt, frame, m);
         }
-        let (mut s, mut t) = (s, t);
-        // The (m−1)-th descendant at the corner, in the patch's (s, t).
-        let mut frame = Frame::UNIT;
-        for m in 1..=MAX_DEPTH {
-            let (q, s2, t2) = descend(s, t);
-            if q != 0 {
+        match locate(s, t) {
+            Some((m, q, s2, t2, frame)) => {
                 let pt = bspline::eval(&self.grid_recent(m, q, cps), s2, t2);
-                return (pt, frame.child(q), m as u8);
+                (pt, frame.child(q), m as u8)
             }
-            frame = frame.child(0);
-            s = s2;
-            t = t2;
+            None => (
+                PatchPoint {
+                    p: self.limit(cps),
+                    ..Default::default()
+                },
+                Frame::UNIT,
+                MAX_DEPTH as u8,
+            ),
         }
-        (
-            PatchPoint {
-                p: self.limit(cps),
-                ..Default::default()
-            },
-            frame,
-            MAX_DEPTH as u8,
-        )
     }
+}
+
+/// Where the exact corner's derivatives are taken: `(2^-10, 2^-10)`.
+const CORNER_NUDGE: f64 = 1.0 / 1024.0;
+
+/// The regular child of the Stam quadtree holding local `(s, t) ≠ (0, 0)` (the extraordinary
+/// corner at `(0, 0)`): its depth `m`, its quadrant `q` within the `(m − 1)`-th corner
+/// descendant, the point's parameters in it, and that descendant's frame within the patch.
+/// `None` within `2^-MAX_DEPTH` of the corner, where the corner's limit position applies.
+fn locate(s: f64, t: f64) -> Option<(usize, usize, f64, f64, Frame)> {
+    let (mut s, mut t) = (s, t);
+    let mut frame = Frame::UNIT;
+    for m in 1..=MAX_DEPTH {
+        let (q, s2, t2) = descend(s, t);
+        if q != 0 {
+            return Some((m, q, s2, t2, frame));
+        }
+        frame = frame.child(0);
+        s = s2;
+        t = t2;
+    }
+    None
 }
 
 /// How many levels [`StamBasis::eval_local`] descends for local `(s, t)` (the extraordinary
 /// corner at `(0, 0)`): the `m` of the regular child that holds the point, [`MAX_DEPTH`]
 /// where the corner's limit position applies.
 pub(crate) fn depth(s: f64, t: f64) -> u8 {
-    if s == 0.0 && t == 0.0 {
-        let eps = 2f64.powi(-10);
-        return depth(eps, eps);
-    }
-    let (mut s, mut t) = (s, t);
-    for m in 1..=MAX_DEPTH {
-        let (q, s2, t2) = descend(s, t);
-        if q != 0 {
-            return m as u8;
-        }
-        s = s2;
-        t = t2;
-    }
-    MAX_DEPTH as u8
+    let (s, t) = if s == 0.0 && t == 0.0 {
+        (CORNER_NUDGE, CORNER_NUDGE)
+    } else {
+        (s, t)
+    };
+    locate(s, t).map_or(MAX_DEPTH, |(m, ..)| m) as u8
 }
 
 /// Sub-patch grids kept per thread by [`StamBasis::grid_recent`].
@@ -590,8 +596,9 @@ mod tests {
     ///
     /// Stam patches sit at the first level where the face is Stam's configuration, end caps
     /// at the maximum level; so at the corner itself (where both evaluate derivatives a fixed
-    /// fraction of their own patch away) and within 2^-50 of it (where Stam's tabulated depth
-    /// may end before on-demand subdivision's) only positions are compared (`exact_level`
+    /// fraction of their own patch away) and within 2^-50 of it (where a corner at `u` or
+    /// `v = 1` is a few `f64` ulps away: 1 − 2^-53 is the last value below 1, and a point
+    /// nearer rounds onto the corner itself) only positions are compared (`exact_level`
     /// false).
     fn compare(a: &Sample, b: &Sample, diag: f64, exact_level: bool, w: &mut Worst) {
         let dist = |x: [f64; 3], y: [f64; 3]| {

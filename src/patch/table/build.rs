@@ -170,9 +170,11 @@ impl PatchTable {
 }
 
 impl PatchTable {
-    /// Settles the faces `caps` of `child` (face, node) that are irregular at the maximum level:
-    /// Stam patches where the configuration allows ([`stam::gather`]), otherwise end caps with
-    /// their own two-ring cut out now, once, for on-demand subdivision at evaluation time.
+    /// Settles the faces `caps` of `child` (face, node) that are irregular at the maximum level
+    /// into end caps, each with its own two-ring cut out now, once, for on-demand subdivision
+    /// at evaluation time. ([`Self::settle`] has already made a Stam patch of every face of
+    /// that level that is Stam's configuration, unless an edit deeper than the maximum level
+    /// forced it; such an edit cannot act, and the end cap evaluates the same surface.)
     fn settle_caps(&mut self, child: &Level, child_offset: u32, caps: &[(u32, u32)], depth: usize) {
         // One cut-out holding the two-rings of all caps of this level.
         let faces: Vec<u32> = caps.iter().map(|c| c.0).collect();
@@ -180,19 +182,6 @@ impl PatchTable {
         let mut cut_first = None;
         for (&(_, node), &face) in caps.iter().zip(&new_faces) {
             let face = face as usize;
-            let found = if self.use_stam {
-                stam::gather(&cut, face)
-            } else {
-                None
-            };
-            if let Some((corner, verts)) = found {
-                let verts: Vec<u32> = verts
-                    .iter()
-                    .map(|&v| child_offset + old[v as usize])
-                    .collect();
-                self.add_stam(node, corner, &verts, depth);
-                continue;
-            }
             // The cut-out's vertices become control points (once per level), and the cap keeps
             // its own two-ring of it.
             let first = *cut_first.get_or_insert_with(|| {
