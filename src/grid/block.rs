@@ -170,38 +170,59 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
     }
     let q = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).floor() as u32;
     let (qx, qy) = (q(x), q(y));
+    let (qx1, qy1) = ((qx + 1).min(65535), (qy + 1).min(65535));
+    // The candidates' coordinates before folding, each computed once ([`oct_direction`]).
+    let (xs, ys) = (
+        [oct_coord(qx), oct_coord(qx1)],
+        [oct_coord(qy), oct_coord(qy1)],
+    );
     // The largest cosine, in `f64` (`1 − cos` of these angles is below `f32`'s resolution),
     // of the decoded direction before its normalisation: no square root per candidate.
     let nd = n.map(f64::from);
     // cos² with its sign, dot·|dot| / len², compared cross-multiplied (no division).
     let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
-    for dy in 0..2u32 {
-        for dx in 0..2u32 {
-            let code = (qx + dx).min(65535) | ((qy + dy).min(65535) << 16);
-            let w = oct_direction(code).map(f64::from);
+    for (dy, &cy) in [qy, qy1].iter().enumerate() {
+        for (dx, &cx) in [qx, qx1].iter().enumerate() {
+            let w = oct_fold(xs[dx], ys[dy]).map(f64::from);
             let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
             let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
             let num = dot * dot.abs();
-            if num * best_len2 > best_num * len2 {
-                (best_num, best_len2, best) = (num, len2, code);
-            }
+            let better = num * best_len2 > best_num * len2;
+            best_num = if better { num } else { best_num };
+            best_len2 = if better { len2 } else { best_len2 };
+            best = if better { cx | (cy << 16) } else { best };
         }
     }
     best
 }
 
-/// The direction of an octahedral code before normalisation (on the octahedron).
+/// One coordinate of an octahedral code's point before folding, in `[-1, 1]`.
 #[inline(always)]
-fn oct_direction(code: u32) -> [f32; 3] {
-    let f = |q: u32| (q as f32 / 65535.0) * 2.0 - 1.0;
-    let (mut x, mut y) = (f(code & 0xFFFF), f(code >> 16));
+fn oct_coord(q: u32) -> f32 {
+    (q as f32 / 65535.0) * 2.0 - 1.0
+}
+
+/// The point `(x, y)` of the square on the octahedron: the upper half where `|x| + |y| ≤ 1`,
+/// the lower half folded out to the corners otherwise.
+#[inline(always)]
+fn oct_fold(x: f32, y: f32) -> [f32; 3] {
     let z = 1.0 - x.abs() - y.abs();
     if z < 0.0 {
         let (ax, ay) = (x.abs(), y.abs());
-        x = (1.0 - ay) * if x >= 0.0 { 1.0 } else { -1.0 };
-        y = (1.0 - ax) * if y >= 0.0 { 1.0 } else { -1.0 };
+        [
+            (1.0 - ay) * if x >= 0.0 { 1.0 } else { -1.0 },
+            (1.0 - ax) * if y >= 0.0 { 1.0 } else { -1.0 },
+            z,
+        ]
+    } else {
+        [x, y, z]
     }
-    [x, y, z]
+}
+
+/// The direction of an octahedral code before normalisation (on the octahedron).
+#[inline(always)]
+fn oct_direction(code: u32) -> [f32; 3] {
+    oct_fold(oct_coord(code & 0xFFFF), oct_coord(code >> 16))
 }
 
 /// The unit vector of an octahedral code.
@@ -249,6 +270,67 @@ mod tests {
             worst = worst.max(sin.atan2(cos));
         }
         assert!(worst < 5e-5, "worst angle {worst}");
+    }
+
+    /// The encoder as first written: every candidate decoded in full, the best kept by
+    /// branches; [`oct_encode`] must choose the same codes.
+    fn oct_encode_reference(n: [f32; 3]) -> u32 {
+        let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+        if !(l1 > 0.0 && l1.is_finite()) {
+            return oct_encode_reference([0.0, 0.0, 1.0]);
+        }
+        let (mut x, mut y) = (n[0] / l1, n[1] / l1);
+        if n[2] < 0.0 {
+            let (ax, ay) = (x.abs(), y.abs());
+            x = (1.0 - ay) * if x >= 0.0 { 1.0 } else { -1.0 };
+            y = (1.0 - ax) * if y >= 0.0 { 1.0 } else { -1.0 };
+        }
+        let q = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).floor() as u32;
+        let (qx, qy) = (q(x), q(y));
+        let nd = n.map(f64::from);
+        let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
+        for dy in 0..2u32 {
+            for dx in 0..2u32 {
+                let code = (qx + dx).min(65535) | ((qy + dy).min(65535) << 16);
+                let w = oct_direction(code).map(f64::from);
+                let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
+                let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+                let num = dot * dot.abs();
+                if num * best_len2 > best_num * len2 {
+                    (best_num, best_len2, best) = (num, len2, code);
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn octahedral_encoder_equals_reference() {
+        let mut rng = SplitMix64(17);
+        let mut special = vec![
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [f32::NAN, 0.0, 1.0],
+            [f32::INFINITY, 0.0, 0.0],
+            [-0.0, -0.0, -1.0],
+            [0.6, -0.8, -0.0],
+        ];
+        for _ in 0..200_000 {
+            let v = [(); 3].map(|_| rng.next_f64() as f32 * 2.0 - 1.0);
+            // Some on the octahedron's edges and the equator, where codes saturate or fold.
+            special.push(match rng.below(4) {
+                0 => [v[0], v[1], 0.0],
+                1 => [v[0], 0.0, v[2]],
+                _ => v,
+            });
+        }
+        for n in special {
+            assert_eq!(oct_encode(n), oct_encode_reference(n), "{n:?}");
+        }
     }
 
     #[test]
