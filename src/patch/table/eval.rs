@@ -159,15 +159,19 @@ impl PatchTable {
         if self.loop_surface.is_some() {
             return None;
         }
+        let patch = self.root_patch(face, k)?;
+        matches!(
+            patch.kind,
+            PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. }
+        )
+        .then_some(patch.level)
+    }
+
+    /// The patch of domain `(face, k)` when its quadtree is that one leaf (`face` and `k` in
+    /// range).
+    fn root_patch(&self, face: usize, k: usize) -> Option<&Patch> {
         match self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize] {
-            Node::Leaf(p) => {
-                let patch = &self.patches[p as usize];
-                matches!(
-                    patch.kind,
-                    PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. }
-                )
-                .then_some(patch.level)
-            }
+            Node::Leaf(p) => Some(&self.patches[p as usize]),
             _ => None,
         }
     }
@@ -192,11 +196,9 @@ impl PatchTable {
         {
             return false;
         }
-        let Node::Leaf(p) = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize]
-        else {
+        let Some(patch) = self.root_patch(face, k) else {
             return false;
         };
-        let patch = &self.patches[p as usize];
         if !matches!(patch.kind, PatchKind::BSpline { .. }) {
             return false;
         }
