@@ -500,6 +500,33 @@ impl GridMesh {
 
     /// Closest hit of `ray` in `[tmin, tmax]`.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if window::has_avx2() {
+            // SAFETY: AVX2 is present (detected).
+            return unsafe { self.intersect_avx2(ray) };
+        }
+        // SAFETY: without `AVX2` nothing beyond the baseline is used.
+        unsafe { self.intersect_with::<false>(ray) }
+    }
+
+    /// [`Self::intersect`] compiled for AVX2 (the whole traversal, the eight-lane leaf test
+    /// inlined).
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn intersect_avx2(&self, ray: &Ray) -> Option<Hit> {
+        // SAFETY: AVX2 is present (this function's contract).
+        unsafe { self.intersect_with::<true>(ray) }
+    }
+
+    /// [`Self::intersect`] with the leaf test of [`window::window_with`].
+    ///
+    /// # Safety
+    /// With `AVX2`, the processor must have AVX2.
+    #[inline(always)]
+    unsafe fn intersect_with<const AVX2: bool>(&self, ray: &Ray) -> Option<Hit> {
         let r = PreparedRay::new(ray)?;
         let mut best: Option<Best> = None;
         let nblocks = self.blocks.len();
@@ -511,7 +538,9 @@ impl GridMesh {
                 if prim < nblocks {
                     let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
                         let (w, lanes) = self.window(b, wx, wy);
-                        if let Some((l, t, b1, b2)) = window::window(&r, &w, lanes, tmax) {
+                        // SAFETY: this function's contract.
+                        let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
+                        if let Some((l, t, b1, b2)) = found {
                             let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
                             let (x, y) = (2 * wx + qx, 2 * wy + qy);
                             let id = b.triangle(x, y, h);
@@ -559,6 +588,32 @@ impl GridMesh {
 
     /// True if anything is hit in `[tmin, tmax]`.
     pub fn occluded(&self, ray: &Ray) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if window::has_avx2() {
+            // SAFETY: AVX2 is present (detected).
+            return unsafe { self.occluded_avx2(ray) };
+        }
+        // SAFETY: without `AVX2` nothing beyond the baseline is used.
+        unsafe { self.occluded_with::<false>(ray) }
+    }
+
+    /// [`Self::occluded`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn occluded_avx2(&self, ray: &Ray) -> bool {
+        // SAFETY: AVX2 is present (this function's contract).
+        unsafe { self.occluded_with::<true>(ray) }
+    }
+
+    /// [`Self::occluded`] with the leaf test of [`window::window_with`].
+    ///
+    /// # Safety
+    /// With `AVX2`, the processor must have AVX2.
+    #[inline(always)]
+    unsafe fn occluded_with<const AVX2: bool>(&self, ray: &Ray) -> bool {
         let Some(r) = PreparedRay::new(ray) else {
             return false;
         };
@@ -572,7 +627,9 @@ impl GridMesh {
                 if prim < nblocks {
                     let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
                         let (w, lanes) = self.window(b, wx, wy);
-                        (tmax, window::window(&r, &w, lanes, tmax).is_some())
+                        // SAFETY: this function's contract.
+                        let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
+                        (tmax, found.is_some())
                     };
                     hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
                 } else {
