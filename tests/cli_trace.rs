@@ -135,6 +135,8 @@ fn accuracy_and_bench_print_json() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["triangles"], 6 * 2 * 16);
+    // The leaf test the traversal ran: the one this processor gets.
+    assert_eq!(v["leaf_test"], limitray::grid::window::leaf_isa());
     let bad = run(&["dice", "/nonexistent.obj", "-o", "-"], "");
     assert_eq!(bad.status.code(), Some(2));
     let bad = run(&["dice", &cube, "--rate", "0", "-o", "-"], "");

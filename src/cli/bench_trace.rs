@@ -116,6 +116,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             "loose_triangles": bvh.loose.len(),
             "top_nodes": bvh.top.nodes.len(),
             "bytes_per_triangle": round(bvh.bytes() as f64 / tris.max(1) as f64, 1),
+            "leaf_test": crate::grid::window::leaf_isa(),
         });
         let sets = [
             ("coherent", camera_rays(bounds, args.rays)),
