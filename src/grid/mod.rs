@@ -13,7 +13,11 @@
 //! edge has the same bits in every block and loose triangle that holds it, and every triangle
 //! is tested with the same watertight test as [`crate::bvh::MeshBvh`] on the same corners in
 //! the same order. Hits and `t` are therefore those of the triangle BVH; on equal `t` the
-//! lowest triangle id wins (independent of traversal order).
+//! lowest triangle id among those the walk reaches wins. Which of several triangles at
+//! exactly the same `t` the walk reaches can depend on its order: the culling compares
+//! rounded quantities (a box's entry distance, the leaf test's `t_scaled` against `tmax ×
+//! det`) with the best `t` so far. The GPU kernels therefore walk the same tree in the same
+//! order as this walk, and `tests/gpu.rs` checks that they agree bit for bit, ties included.
 
 pub mod block;
 pub mod node;
