@@ -337,8 +337,8 @@ struct MeshHit {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Grid meshes (src/grid): four boxes at once (node::test4_scalar), the front-to-back order
-// (node::front_to_back), the top level's walk (top::Top::walk), a block's implicit hierarchy
+// Grid meshes (src/grid): four and eight boxes at once (node::test4_scalar, test8_scalar), the
+// front-to-back order (node::front_to_back), the top level's walk (top::Top::walk), a block's implicit hierarchy
 // (GridMesh::walk_block) and the window test (window::window_scalar), each in the CPU's order.
 
 struct Box4Hit {
@@ -364,6 +364,50 @@ fn test4(bx: u32, r: PRay, tmax: f32) -> Box4Hit {
 struct Order4 {
     c: array<u32, 4>,
     n: u32,
+}
+
+struct Box8Hit {
+    mask: u32,
+    near: array<f32, 8>,
+}
+
+// The eight boxes of the Box8 at word `bx` met within `tmax`, and their entry distances.
+fn test8(bx: u32, r: PRay, tmax: f32) -> Box8Hit {
+    var out: Box8Hit;
+    out.mask = 0u;
+    for (var c = 0u; c < TOP_WIDTH; c++) {
+        let se = slab(bx + c, BOX8_HI, TOP_WIDTH, r, tmax);
+        if (se.x <= se.y) {
+            out.mask |= 1u << c;
+        }
+        out.near[c] = se.x;
+    }
+    return out;
+}
+
+struct Order8 {
+    c: array<u32, 8>,
+    n: u32,
+}
+
+// front_to_back over the eight children of a Box8Hit.
+fn front_to_back8(h: Box8Hit) -> Order8 {
+    var o: Order8;
+    o.n = 0u;
+    var near = h.near;
+    for (var c = 0u; c < TOP_WIDTH; c++) {
+        if ((h.mask & (1u << c)) == 0u) {
+            continue;
+        }
+        var i = o.n;
+        while (i > 0u && near[c] < near[o.c[i - 1u]]) {
+            o.c[i] = o.c[i - 1u];
+            i -= 1u;
+        }
+        o.c[i] = c;
+        o.n += 1u;
+    }
+    return o;
 }
 
 // The children in `mask`, nearest first, ties by child index (insertion in index order).
@@ -570,11 +614,11 @@ fn intersect_mesh(m: u32, r: PRay, anyhit: bool) -> MeshHit {
             continue;
         }
         let node = top_off + TOP_WORDS * e.x;
-        var h = test4(node, r, b.tmax);
+        var h = test8(node, r, b.tmax);
         if (h.mask == 0u) {
             continue;
         }
-        var order = front_to_back(h.mask, h.near);
+        var order = front_to_back8(h);
         // Far to near: the nearest is popped first.
         for (var k = order.n; k > 0u; k--) {
             let c = order.c[k - 1u];

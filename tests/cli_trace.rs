@@ -135,6 +135,16 @@ fn accuracy_and_bench_print_json() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["triangles"], 6 * 2 * 16);
+    // One 4×4-quad block per face, all six under the 8-wide root: one level, and a walk that
+    // holds at most the root's six children.
+    assert_eq!(
+        (v["blocks"].as_u64(), v["loose_triangles"].as_u64()),
+        (Some(6), Some(0))
+    );
+    assert_eq!(
+        (v["top_depth"].as_u64(), v["top_stack"].as_u64()),
+        (Some(1), Some(6))
+    );
     // The leaf test the traversal ran: the one this processor gets.
     assert_eq!(v["leaf_test"], limitray::grid::window::leaf_isa());
     let bad = run(&["dice", "/nonexistent.obj", "-o", "-"], "");

@@ -466,8 +466,8 @@ fn cli_trace_gpu_prints_what_the_cpu_prints() {
 #[test]
 fn path_kernels_compile() {
     let Some(ctx) = ctx() else { return };
-    for used in [1, 3] {
-        if let Err(e) = limitray::gpu::render::PathKernels::new(&ctx, used) {
+    for (used, stack) in [(1, 1), (3, limitray::gpu::layout::GRID_STACK_MAX)] {
+        if let Err(e) = limitray::gpu::render::PathKernels::new(&ctx, used, stack) {
             panic!("{e}");
         }
     }

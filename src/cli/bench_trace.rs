@@ -115,6 +115,8 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             "blocks": bvh.blocks.len(),
             "loose_triangles": bvh.loose.len(),
             "top_nodes": bvh.top.nodes.len(),
+            "top_depth": bvh.top.depth,
+            "top_stack": bvh.top.stack,
             "bytes_per_triangle": round(bvh.bytes() as f64 / tris.max(1) as f64, 1),
             "leaf_test": crate::grid::window::leaf_isa(),
         });

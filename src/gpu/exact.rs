@@ -29,7 +29,7 @@ pub fn edge_exact_gpu(ctx: &GpuContext, cases: &[[f32; 4]]) -> Result<Vec<f32>> 
             label: Some("exact test"),
             entries: &[entry(0, true), entry(1, false)],
         });
-    let src = super::layout::module_source(super::layout::kernels::EXACT_TEST_MODULE);
+    let src = super::layout::module_source(super::layout::kernels::EXACT_TEST_MODULE, 1);
     let pipeline = ctx.compute_pipeline("exact_test", &src, "exact_main", &layout, &[])?;
     let input = ctx
         .device

@@ -8,15 +8,15 @@
 use crate::bvh::mesh::WideBoxes;
 use crate::bvh::SceneBvh;
 use crate::error::{Error, ErrorKind, Result};
-use crate::grid::node::Box4;
+use crate::grid::node::{Box4, Box8};
 use crate::grid::GridMesh;
 use wgpu::util::DeviceExt;
 
 use super::layout::{
     BLK_BOXES, BLK_DIMS, BLK_NORMAL, BLK_ROOT, BLK_TRI0, BLK_TRI_STRIDE, BLK_VERT, BLK_WORDS,
-    BOX4_WORDS, GEO_CHUNKS, GRID_STACK, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BLOCK_OFF,
-    MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_STRIP_OFF, MESH_TOP_OFF, MESH_WORDS,
-    TRAVERSAL_STACK,
+    BOX4_WORDS, BOX8_WORDS, GEO_CHUNKS, GRID_STACK_MAX, INSTANCE_WORDS, INST_MESH, INST_XFORM,
+    MESH_BLOCK_OFF, MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_STRIP_OFF, MESH_TOP_OFF,
+    MESH_WORDS, TRAVERSAL_STACK,
 };
 use super::GpuContext;
 
@@ -39,6 +39,9 @@ pub struct PackedScene {
     pub inst_off: u32,
     /// Word offset of the top-level nodes' exact child boxes.
     pub top_box_off: u32,
+    /// The most stack entries any mesh's walk can hold ([`crate::grid::top::Top::stack`]):
+    /// the kernels' `GRID_STACK`.
+    pub grid_stack: u32,
 }
 
 fn offset(words: &[u32]) -> Result<u32> {
@@ -69,26 +72,29 @@ fn box4_words(b: &Box4) -> [u32; BOX4_WORDS] {
     })
 }
 
-/// The deepest grid top level the kernels' stack ([`GRID_STACK`] entries) walks.
-pub fn max_grid_depth() -> usize {
-    (GRID_STACK as usize - 1) / 3
+/// A `Box8`'s words: `lo[axis][child]`, then `hi`.
+fn box8_words(b: &Box8) -> [u32; BOX8_WORDS] {
+    std::array::from_fn(|i| {
+        let side = if i < BOX8_WORDS / 2 { &b.lo } else { &b.hi };
+        let j = i % (BOX8_WORDS / 2);
+        side[j / 8][j % 8].to_bits()
+    })
 }
 
 fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &GridMesh) -> Result<()> {
-    if m.top.depth > max_grid_depth() {
+    if m.top.stack > GRID_STACK_MAX as usize {
         return Err(Error::new(
             ErrorKind::Gpu,
             format!(
-                "a mesh's top level is {} nodes deep; the GPU walk holds {} (at most {} levels)",
-                m.top.depth,
-                GRID_STACK,
-                max_grid_depth()
+                "a mesh's top level ({} nodes deep) can need {} stack entries; the GPU walk \
+                 holds at most {GRID_STACK_MAX}",
+                m.top.depth, m.top.stack
             ),
         ));
     }
     let top_off = offset(words)?;
     for n in &m.top.nodes {
-        words.extend_from_slice(&box4_words(&n.boxes));
+        words.extend_from_slice(&box8_words(&n.boxes));
         words.extend_from_slice(&n.child);
     }
     let coord_off = offset(words)?;
@@ -138,6 +144,7 @@ impl PackedScene {
         Ok(PackedScene {
             words,
             mode: 0,
+            grid_stack: m.top.stack as u32,
             ..Default::default()
         })
     }
@@ -198,6 +205,12 @@ impl PackedScene {
             top_index_off,
             inst_off,
             top_box_off,
+            grid_stack: s
+                .meshes
+                .iter()
+                .map(|m| m.top.stack as u32)
+                .max()
+                .unwrap_or(1),
         })
     }
 
@@ -286,5 +299,26 @@ impl GpuGeometry {
             used_chunks,
             chunk_shift,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mesh whose top level can need more stack than the kernel holds is refused with an
+    /// error that says so; one that needs exactly the kernel's stack is packed.
+    #[test]
+    fn a_top_level_beyond_the_kernel_stack_is_refused() {
+        let mut m = GridMesh::default();
+        m.top.root = crate::grid::top::EMPTY;
+        m.top.stack = GRID_STACK_MAX as usize;
+        assert_eq!(
+            PackedScene::from_mesh(&m).unwrap().grid_stack,
+            GRID_STACK_MAX
+        );
+        m.top.stack += 1;
+        let e = PackedScene::from_mesh(&m).unwrap_err();
+        assert!(e.to_string().contains("stack entries"), "{e}");
     }
 }

@@ -42,10 +42,12 @@ shared_consts! {
     /// skipping subtrees.
     TRAVERSAL_STACK: u32 = 32;
 
-    /// Entries of the stack of a mesh's grid top level ([`crate::grid::top`]): a 4-wide
-    /// walk holds at most `3 · depth + 1` entries, and the host refuses a mesh whose top level
-    /// is deeper than this allows (never a silently truncated walk).
-    GRID_STACK: u32 = 64;
+    /// The most entries the stack of a mesh's grid top level ([`crate::grid::top`]) may have.
+    /// Kernels are compiled for each scene with `GRID_STACK` (declared by [`module_source`])
+    /// set to the most any of its meshes' walks can hold ([`crate::grid::top::Top::stack`],
+    /// the exact worst case over all rays, computed from the tree); the host refuses a mesh
+    /// that needs more than this, never a silently truncated walk.
+    GRID_STACK_MAX: u32 = 512;
 
     // ---- Mesh record (one per mesh, at `Params::mesh_off`): a grid mesh
     // ([`crate::grid::GridMesh`]).
@@ -75,11 +77,19 @@ shared_consts! {
     /// Offset of the upper corners in a `Box4`.
     BOX4_HI: usize = 12;
 
-    // ---- Grid top-level node (`Node4`): a `Box4`, then four child references.
+    // ---- Eight boxes (`Box8`): lo[axis][child], then hi[axis][child].
+    /// Words of a `Box8`.
+    BOX8_WORDS: usize = 48;
+    /// Offset of the upper corners in a `Box8`.
+    BOX8_HI: usize = 24;
+
+    // ---- Grid top-level node (`Node8`): a `Box8`, then eight child references.
+    /// Children per top-level node.
+    TOP_WIDTH: u32 = crate::grid::top::WIDTH as u32;
     /// Words per top-level node.
-    TOP_WORDS: usize = 28;
+    TOP_WORDS: usize = 56;
     /// Node: first child reference.
-    TOP_CHILD: usize = 24;
+    TOP_CHILD: usize = 48;
     /// A child reference to a primitive (block or loose triangle).
     TOP_LEAF: u32 = crate::grid::top::LEAF;
     /// An absent child.
@@ -442,8 +452,10 @@ const _: () = {
     assert!(BOX_HI == 3 * NODE_CHILDREN);
     assert!(size_of::<crate::grid::node::Box4>() == BOX4_WORDS * 4);
     assert!(offset_of!(crate::grid::node::Box4, hi) == BOX4_HI * 4);
-    assert!(size_of::<crate::grid::top::Node4>() == TOP_WORDS * 4);
-    assert!(offset_of!(crate::grid::top::Node4, child) == TOP_CHILD * 4);
+    assert!(size_of::<crate::grid::node::Box8>() == BOX8_WORDS * 4);
+    assert!(offset_of!(crate::grid::node::Box8, hi) == BOX8_HI * 4);
+    assert!(size_of::<crate::grid::top::Node8>() == TOP_WORDS * 4);
+    assert!(offset_of!(crate::grid::top::Node8, child) == TOP_CHILD * 4);
     assert!(BLK_NORMAL < BLK_WORDS && LOOSE_ID < LOOSE_WORDS);
     assert!(CAM_WORDS <= HEADER_WORDS - H_CAMERA);
     assert!(H_MESH_EXTRA < H_CAMERA);
@@ -519,12 +531,17 @@ fn wgsl_u32(name: &str, value: u64) -> String {
     format!("const {name}: u32 = {value}u;\n")
 }
 
-/// The WGSL declarations of every shared constant and of `struct Params`.
-pub fn prelude() -> String {
+/// The WGSL declarations of every shared constant, of the scene's `GRID_STACK` (entries of a
+/// mesh walk's stack, 1 to [`GRID_STACK_MAX`]) and of `struct Params`.
+pub fn prelude(grid_stack: u32) -> String {
     let mut s = String::from("// Generated from src/gpu/layout.rs: the host's layouts.\n");
     for &(name, value) in CONSTANTS {
         s.push_str(&wgsl_u32(name, value));
     }
+    s.push_str(&wgsl_u32(
+        "GRID_STACK",
+        grid_stack.clamp(1, GRID_STACK_MAX) as u64,
+    ));
     for &(name, value) in F32_CONSTANTS {
         // `{:?}` is the shortest decimal that reads back as the same f32; the `f` suffix makes
         // the literal an f32 (rounded once, from the decimal).
@@ -534,9 +551,10 @@ pub fn prelude() -> String {
     s
 }
 
-/// A kernel module: the prelude, then `parts` in order.
-pub fn module_source(parts: &[&str]) -> String {
-    let mut s = prelude();
+/// A kernel module: the prelude (for a scene whose mesh walks need `grid_stack` entries),
+/// then `parts` in order.
+pub fn module_source(parts: &[&str], grid_stack: u32) -> String {
+    let mut s = prelude(grid_stack);
     for p in parts {
         s.push('\n');
         s.push_str(p);
@@ -619,7 +637,7 @@ mod tests {
 
     #[test]
     fn the_prelude_defines_every_constant_the_kernels_use() {
-        let prelude = prelude();
+        let prelude = prelude(GRID_STACK_MAX);
         let shared = declared(&prelude);
         for (module, parts) in kernels::MODULES {
             let own: BTreeSet<String> = parts.iter().flat_map(|p| declared(p)).collect();
@@ -688,7 +706,7 @@ mod tests {
     #[test]
     fn every_module_validates() {
         for (module, parts) in kernels::MODULES {
-            let src = module_source(parts);
+            let src = module_source(parts, GRID_STACK_MAX);
             let parsed = naga::front::wgsl::parse_str(&src)
                 .unwrap_or_else(|e| panic!("module {module}: {}", e.emit_to_string(&src)));
             naga::valid::Validator::new(
@@ -702,7 +720,7 @@ mod tests {
 
     #[test]
     fn the_prelude_writes_each_value_once_and_exactly() {
-        let p = prelude();
+        let p = prelude(GRID_STACK_MAX);
         assert!(p.contains("const NODE_WORDS: u32 = 20u;\n"));
         assert!(p.contains("const NONE: u32 = 4294967295u;\n"));
         assert!(p.contains("const DELTA_ALPHA: f32 = 0.001f;\n"));

@@ -18,10 +18,11 @@ pub struct PathKernels {
 }
 
 impl PathKernels {
-    /// Compiles the kernels for geometry in `geo_used` chunks.
-    pub fn new(ctx: &GpuContext, geo_used: usize) -> Result<PathKernels> {
+    /// Compiles the kernels for geometry in `geo_used` chunks and mesh walks of at most
+    /// `grid_stack` stack entries ([`PackedScene::grid_stack`]).
+    pub fn new(ctx: &GpuContext, geo_used: usize, grid_stack: u32) -> Result<PathKernels> {
         let layout = layout(ctx, &[false, false]);
-        let src = module_source(kernels::PATH_MODULE);
+        let src = module_source(kernels::PATH_MODULE, grid_stack);
         let c = [("GEO_USED", geo_used as f64)];
         let path = ctx.compute_pipeline("path", &src, "path_main", &layout, &c)?;
         let primary = ctx.compute_pipeline("primary", &src, "primary_main", &layout, &c)?;
@@ -319,7 +320,7 @@ impl<'a> GpuRenderer<'a> {
     pub fn new(ctx: &'a GpuContext, world: &World, max_chunk_words: Option<u64>) -> Result<Self> {
         let (packed, render_off) = pack_world(world)?;
         let geo = GpuGeometry::upload(ctx, &packed, max_chunk_words)?;
-        let kernels = PathKernels::new(ctx, geo.used_chunks)?;
+        let kernels = PathKernels::new(ctx, geo.used_chunks, packed.grid_stack)?;
         Ok(GpuRenderer {
             ctx,
             packed,

@@ -186,7 +186,7 @@ impl<'a> GpuTracer<'a> {
     pub fn new(ctx: &'a GpuContext, packed: PackedScene, opts: TraceOptions) -> Result<Self> {
         let geo = GpuGeometry::upload(ctx, &packed, opts.max_chunk_words)?;
         let layout = layout(ctx, &[true, false]);
-        let src = module_source(kernels::TRACE_MODULE);
+        let src = module_source(kernels::TRACE_MODULE, packed.grid_stack);
         let pipeline = ctx.compute_pipeline(
             "trace",
             &src,

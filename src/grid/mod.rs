@@ -6,8 +6,8 @@
 //! [`node::Box4`]), and its leaf test runs on the eight triangles of a window at once
 //! ([`window`]). The triangles outside the grids (zippers between different rates, tiny
 //! domains) are *loose* triangles with their own records, grouped into strips of at most
-//! [`STRIP`] consecutive triangles of one domain. A 4-wide BVH over blocks and strips is the top
-//! level ([`top`]), its boxes exact.
+//! [`STRIP`] consecutive triangles of one domain. An 8-wide BVH over blocks and strips is the
+//! top level ([`top`]), its boxes exact.
 //!
 //! The vertices are the diced mesh's `f32` points, copied bit for bit: a vertex on a shared
 //! edge has the same bits in every block and loose triangle that holds it, and every triangle
@@ -534,59 +534,59 @@ impl GridMesh {
         let r = PreparedRay::new(ray)?;
         let mut best: Option<Best> = None;
         let nblocks = self.blocks.len();
-        self.top.walk(
-            &r,
-            r.tmax,
-            |prim, tmax| {
-                let prim = prim as usize;
-                if prim < nblocks {
-                    let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
-                        let (w, lanes) = self.window(b, wx, wy);
-                        // SAFETY: this function's contract.
-                        let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
-                        if let Some((l, t, b1, b2)) = found {
-                            let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
-                            let (x, y) = (2 * wx + qx, 2 * wy + qy);
-                            let id = b.triangle(x, y, h);
-                            if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
-                                best = Some(Best {
-                                    at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
-                                    id,
-                                    t,
-                                    b1,
-                                    b2,
-                                });
-                                return (t, false);
-                            }
-                        }
-                        (tmax, false)
-                    };
-                    let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
-                    (t, false)
-                } else {
-                    let [first, count] = self.strips[prim - nblocks];
-                    let mut tmax = tmax;
-                    for li in first..first + count {
-                        let tri = &self.loose[li as usize];
-                        let [a, b, c] = tri.p;
-                        if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
-                            if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
-                                best = Some(Best {
-                                    at: Found::Loose(li),
-                                    id: tri.id,
-                                    t,
-                                    b1,
-                                    b2,
-                                });
-                                tmax = t;
-                            }
+        let visit = |prim: u32, tmax: f32| {
+            let prim = prim as usize;
+            if prim < nblocks {
+                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
+                    let (w, lanes) = self.window(b, wx, wy);
+                    // SAFETY: this function's contract.
+                    let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
+                    if let Some((l, t, b1, b2)) = found {
+                        let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
+                        let (x, y) = (2 * wx + qx, 2 * wy + qy);
+                        let id = b.triangle(x, y, h);
+                        if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+                            best = Some(Best {
+                                at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
+                                id,
+                                t,
+                                b1,
+                                b2,
+                            });
+                            return (t, false);
                         }
                     }
                     (tmax, false)
+                };
+                let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
+                (t, false)
+            } else {
+                let [first, count] = self.strips[prim - nblocks];
+                let mut tmax = tmax;
+                for li in first..first + count {
+                    let tri = &self.loose[li as usize];
+                    let [a, b, c] = tri.p;
+                    if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
+                        if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
+                            best = Some(Best {
+                                at: Found::Loose(li),
+                                id: tri.id,
+                                t,
+                                b1,
+                                b2,
+                            });
+                            tmax = t;
+                        }
+                    }
                 }
-            },
-            |p| self.prefetch(p),
-        );
+                (tmax, false)
+            }
+        };
+        // SAFETY: this function's contract.
+        unsafe {
+            self.top
+                .walk::<AVX2>(&r, r.tmax, visit, |p| self.prefetch(p))
+        };
         best.map(|b| self.hit(b))
     }
 
@@ -623,29 +623,29 @@ impl GridMesh {
         };
         let mut hit = false;
         let nblocks = self.blocks.len();
-        self.top.walk(
-            &r,
-            r.tmax,
-            |prim, tmax| {
-                let prim = prim as usize;
-                if prim < nblocks {
-                    let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
-                        let (w, lanes) = self.window(b, wx, wy);
-                        // SAFETY: this function's contract.
-                        let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
-                        (tmax, found.is_some())
-                    };
-                    hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
-                } else {
-                    let [first, count] = self.strips[prim - nblocks];
-                    hit = self.loose[first as usize..(first + count) as usize]
-                        .iter()
-                        .any(|l| intersect_prepared(&r, l.p[0], l.p[1], l.p[2], tmax).is_some());
-                }
-                (tmax, hit)
-            },
-            |p| self.prefetch(p),
-        );
+        let visit = |prim: u32, tmax: f32| {
+            let prim = prim as usize;
+            if prim < nblocks {
+                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
+                    let (w, lanes) = self.window(b, wx, wy);
+                    // SAFETY: this function's contract.
+                    let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
+                    (tmax, found.is_some())
+                };
+                hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
+            } else {
+                let [first, count] = self.strips[prim - nblocks];
+                hit = self.loose[first as usize..(first + count) as usize]
+                    .iter()
+                    .any(|l| intersect_prepared(&r, l.p[0], l.p[1], l.p[2], tmax).is_some());
+            }
+            (tmax, hit)
+        };
+        // SAFETY: this function's contract.
+        unsafe {
+            self.top
+                .walk::<AVX2>(&r, r.tmax, visit, |p| self.prefetch(p))
+        };
         hit
     }
 

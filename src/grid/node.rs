@@ -1,4 +1,5 @@
-//! Four boxes at once: the inner nodes of a grid block's implicit hierarchy.
+//! Four and eight boxes at once: the inner nodes of a grid block's implicit hierarchy
+//! ([`Box4`]) and of the top level over blocks ([`Box8`]).
 
 use crate::bvh::triangle::{PreparedRay, GAMMA3};
 
@@ -106,8 +107,8 @@ pub fn test4(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
 
 /// The children in `mask`, nearest entry first (ties by child index).
 #[inline(always)]
-pub fn front_to_back(mask: u32, near: &[f32; 4]) -> ([u8; 4], usize) {
-    let mut order = [0u8; 4];
+pub fn front_to_back<const N: usize>(mask: u32, near: &[f32; N]) -> ([u8; N], usize) {
+    let mut order = [0u8; N];
     let mut n = 0;
     let mut m = mask;
     while m != 0 {
@@ -123,6 +124,143 @@ pub fn front_to_back(mask: u32, near: &[f32; 4]) -> ([u8; 4], usize) {
         n += 1;
     }
     (order, n)
+}
+
+/// Eight axis-aligned boxes, structure of arrays, as [`Box4`]: the child boxes of a top-level
+/// node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct Box8 {
+    /// Lower corners: `lo[axis][child]`.
+    pub lo: [[f32; 8]; 3],
+    /// Upper corners.
+    pub hi: [[f32; 8]; 3],
+}
+
+impl Default for Box8 {
+    fn default() -> Self {
+        Box8 {
+            lo: [[f32::INFINITY; 8]; 3],
+            hi: [[f32::NEG_INFINITY; 8]; 3],
+        }
+    }
+}
+
+impl Box8 {
+    /// Grows child `c` to contain point `p`.
+    pub fn include(&mut self, c: usize, p: [f32; 3]) {
+        for a in 0..3 {
+            self.lo[a][c] = self.lo[a][c].min(p[a]);
+            self.hi[a][c] = self.hi[a][c].max(p[a]);
+        }
+    }
+
+    /// Bounds of child `c` (`[lo, hi]`).
+    pub fn child(&self, c: usize) -> [[f32; 3]; 2] {
+        [
+            std::array::from_fn(|a| self.lo[a][c]),
+            std::array::from_fn(|a| self.hi[a][c]),
+        ]
+    }
+}
+
+/// Reference for [`test8`]: [`PreparedRay::hits_box`] on each of the eight children, as
+/// [`test4_scalar`].
+pub fn test8_scalar(b: &Box8, r: &PreparedRay, tmax: f32) -> (u32, [f32; 8]) {
+    let mut mask = 0;
+    let mut near = [0f32; 8];
+    for c in 0..8 {
+        let mut n = r.tmin;
+        let mut f = tmax;
+        for a in 0..3 {
+            let (lo, hi) = if r.inv[a].is_sign_negative() {
+                (b.hi[a][c], b.lo[a][c])
+            } else {
+                (b.lo[a][c], b.hi[a][c])
+            };
+            let tn = (lo - r.o[a]) * r.inv[a];
+            let tf = (hi - r.o[a]) * r.inv[a] * (1.0 + 2.0 * GAMMA3);
+            n = n.max(tn);
+            f = f.min(tf);
+        }
+        if n <= f {
+            mask |= 1 << c;
+        }
+        near[c] = n;
+    }
+    (mask, near)
+}
+
+/// [`test8_scalar`] bit for bit: one AVX2 pass with `AVX2`, else two SSE2 halves (the
+/// operations of [`test4`]); the scalar reference off x86_64.
+///
+/// # Safety
+/// With `AVX2`, the processor must have AVX2.
+#[inline(always)]
+pub unsafe fn test8<const AVX2: bool>(b: &Box8, r: &PreparedRay, tmax: f32) -> (u32, [f32; 8]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let mut out = [0f32; 8];
+        if AVX2 {
+            // SAFETY: AVX2 is present (this function's contract); `Box8` is 32-byte aligned.
+            unsafe {
+                let scale = _mm256_set1_ps(1.0 + 2.0 * GAMMA3);
+                let mut near = _mm256_set1_ps(r.tmin);
+                let mut far = _mm256_set1_ps(tmax);
+                for a in 0..3 {
+                    let lo = _mm256_load_ps(b.lo[a].as_ptr());
+                    let hi = _mm256_load_ps(b.hi[a].as_ptr());
+                    let (n, f) = if r.inv[a].is_sign_negative() {
+                        (hi, lo)
+                    } else {
+                        (lo, hi)
+                    };
+                    let o = _mm256_set1_ps(r.o[a]);
+                    let inv = _mm256_set1_ps(r.inv[a]);
+                    let tn = _mm256_mul_ps(_mm256_sub_ps(n, o), inv);
+                    let tf = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(f, o), inv), scale);
+                    near = _mm256_max_ps(tn, near);
+                    far = _mm256_min_ps(tf, far);
+                }
+                let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
+                _mm256_storeu_ps(out.as_mut_ptr(), near);
+                return (mask, out);
+            }
+        }
+        // SAFETY: SSE2 is part of the x86_64 baseline; `Box8` is 32-byte aligned, so each
+        // half is 16-byte aligned.
+        unsafe {
+            let scale = _mm_set1_ps(1.0 + 2.0 * GAMMA3);
+            let mut mask = 0;
+            for half in 0..2 {
+                let mut near = _mm_set1_ps(r.tmin);
+                let mut far = _mm_set1_ps(tmax);
+                for a in 0..3 {
+                    let lo = _mm_load_ps(b.lo[a].as_ptr().add(4 * half));
+                    let hi = _mm_load_ps(b.hi[a].as_ptr().add(4 * half));
+                    let (n, f) = if r.inv[a].is_sign_negative() {
+                        (hi, lo)
+                    } else {
+                        (lo, hi)
+                    };
+                    let o = _mm_set1_ps(r.o[a]);
+                    let inv = _mm_set1_ps(r.inv[a]);
+                    let tn = _mm_mul_ps(_mm_sub_ps(n, o), inv);
+                    let tf = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(f, o), inv), scale);
+                    near = _mm_max_ps(tn, near);
+                    far = _mm_min_ps(tf, far);
+                }
+                mask |= (_mm_movemask_ps(_mm_cmple_ps(near, far)) as u32) << (4 * half);
+                _mm_storeu_ps(out.as_mut_ptr().add(4 * half), near);
+            }
+            (mask, out)
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        test8_scalar(b, r, tmax)
+    }
 }
 
 #[cfg(test)]
@@ -175,8 +313,70 @@ mod tests {
         }
     }
 
+    /// The eight-box test matches the scalar reference bit for bit, with AVX2 (when the
+    /// processor has it) and with two SSE2 halves, on random boxes, absent children, axis-
+    /// parallel rays and origins on a face.
+    #[test]
+    fn box8_tests_match_scalar() {
+        let mut rng = SplitMix64(19);
+        let mut f = |s: f64| ((rng.next_f64() - 0.5) * s) as f32;
+        for i in 0..20000 {
+            let mut b = Box8::default();
+            for c in 0..8 {
+                if (i + c) % 5 == 0 {
+                    continue;
+                }
+                for a in 0..3 {
+                    let (x, y) = (f(4.0), f(4.0));
+                    b.lo[a][c] = x.min(y);
+                    b.hi[a][c] = x.max(y);
+                }
+            }
+            let mut d = [f(2.0), f(2.0), f(2.0)];
+            if i % 4 == 0 {
+                d[i % 3] = 0.0;
+            }
+            if d == [0.0; 3] {
+                d[0] = 1.0;
+            }
+            let mut o = [f(8.0), f(8.0), f(8.0)];
+            if i % 5 == 0 && b.lo[i % 3][6].is_finite() {
+                o[i % 3] = b.lo[i % 3][6];
+            }
+            let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
+            for tmax in [f32::INFINITY, 1.0] {
+                let (m2, n2) = test8_scalar(&b, &r, tmax);
+                #[cfg(target_arch = "x86_64")]
+                let avx = crate::grid::window::has_avx2();
+                #[cfg(not(target_arch = "x86_64"))]
+                let avx = false;
+                // SAFETY: AVX2 only where detected.
+                let runs = unsafe {
+                    [
+                        Some(test8::<false>(&b, &r, tmax)),
+                        avx.then(|| test8::<true>(&b, &r, tmax)),
+                    ]
+                };
+                for (m1, n1) in runs.into_iter().flatten() {
+                    assert_eq!(m1, m2, "box {i}");
+                    for c in 0..8 {
+                        if m1 & (1 << c) != 0 {
+                            assert_eq!(n1[c].to_bits(), n2[c].to_bits());
+                        }
+                    }
+                }
+                for c in 0..8 {
+                    let [lo, hi] = b.child(c);
+                    assert_eq!(m2 & (1 << c) != 0, r.hits_box(lo, hi, tmax));
+                }
+            }
+        }
+    }
+
     #[test]
     fn order_is_front_to_back() {
+        let (o, n) = front_to_back(0b1010_0110, &[0.0, 5.0, 2.0, 9.0, 9.0, 2.0, 0.0, 1.0]);
+        assert_eq!((n, &o[..n]), (4, &[7u8, 2, 5, 1][..]));
         let (o, n) = front_to_back(0b1011, &[3.0, 1.0, 0.0, 1.0]);
         assert_eq!((n, &o[..n]), (3, &[1u8, 3, 0][..]));
     }

@@ -1,12 +1,13 @@
-//! The top level over grid blocks and loose triangles: a 4-wide BVH collapsed from obvhs's
-//! binary PLOC build, with exact `f32` child boxes ([`Box4`]) and an ordered, distance-culled
-//! stack traversal.
+//! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from obvhs's
+//! binary PLOC build, with exact `f32` child boxes ([`Box8`]) and an ordered, distance-culled
+//! stack traversal. Eight children per node halve the levels a ray walks against a 4-wide
+//! tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
 //!
-//! Each node's four boxes are the exact bounds of what lies below each child (recomputed from
+//! Each node's eight boxes are the exact bounds of what lies below each child (recomputed from
 //! the primitives' boxes, never taken from the builder), so the conservative box test of
 //! [`crate::bvh::triangle::PreparedRay::hits_box`] can never cull a primitive the ray meets.
 
-use super::node::{test4, Box4};
+use super::node::{test8, Box8};
 use crate::bvh::triangle::PreparedRay;
 use glam::Vec3A;
 use obvhs::bvh2::builder::build_bvh2;
@@ -19,25 +20,42 @@ pub const LEAF: u32 = 1 << 31;
 /// An absent child.
 pub const EMPTY: u32 = u32::MAX;
 
-/// A node: four child boxes and references.
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// A node: eight child boxes and references.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
-pub struct Node4 {
+#[repr(C, align(32))]
+pub struct Node8 {
     /// Child boxes (absent children: empty boxes).
-    pub boxes: Box4,
+    pub boxes: Box8,
     /// Child references.
-    pub child: [Ref; 4],
+    pub child: [Ref; WIDTH],
+}
+
+impl Node8 {
+    const EMPTY: Node8 = Node8 {
+        boxes: Box8 {
+            lo: [[f32::INFINITY; WIDTH]; 3],
+            hi: [[f32::NEG_INFINITY; WIDTH]; 3],
+        },
+        child: [EMPTY; WIDTH],
+    };
 }
 
 /// The top level.
 #[derive(Clone, Debug, Default)]
 pub struct Top {
     /// Nodes (the root first, when the root is a node).
-    pub nodes: Vec<Node4>,
+    pub nodes: Vec<Node8>,
     /// The root reference ([`EMPTY`] when there is nothing).
     pub root: Ref,
     /// Node levels on the longest path.
     pub depth: usize,
+    /// The most entries [`Top::walk`]'s stack can hold at once, over every ray: on each
+    /// root-to-leaf path, one plus the siblings pushed below each node (see
+    /// [`Top::stack_need`]).
+    pub stack: usize,
 }
 
 struct PrimBox([[f32; 3]; 2]);
@@ -75,19 +93,19 @@ impl Top {
                 nodes: Vec::new(),
                 root: EMPTY,
                 depth: 0,
+                stack: 0,
             };
         }
         if boxes.len() == 1 {
-            let mut node = Node4 {
-                boxes: Box4::default(),
-                child: [LEAF, EMPTY, EMPTY, EMPTY],
-            };
+            let mut node = Node8::EMPTY;
+            node.child[0] = LEAF;
             node.boxes.include(0, boxes[0][0]);
             node.boxes.include(0, boxes[0][1]);
             return Top {
                 nodes: vec![node],
                 root: 0,
                 depth: 1,
+                stack: 1,
             };
         }
         let prims: Vec<PrimBox> = boxes.iter().map(|&b| PrimBox(b)).collect();
@@ -101,8 +119,9 @@ impl Top {
             nodes: Vec::with_capacity(bvh2.nodes.len() / 3 + 1),
             root: 0,
             depth: 0,
+            stack: 0,
         };
-        // Iterative collapse: each entry is a binary node to become a 4-wide node at `slot`.
+        // Iterative collapse: each entry is a binary node to become an 8-wide node at `slot`.
         let leaf_ref = |n: usize, out: &mut Vec<Ref>| {
             let node = &bvh2.nodes[n];
             for i in 0..node.prim_count {
@@ -110,20 +129,17 @@ impl Top {
             }
         };
         let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, 1)];
-        top.nodes.push(Node4 {
-            boxes: Box4::default(),
-            child: [EMPTY; 4],
-        });
+        top.nodes.push(Node8::EMPTY);
         while let Some((bin, slot, level)) = work.pop() {
             top.depth = top.depth.max(level);
-            // Open the largest inner child until four children.
+            // Open the largest inner child until eight children.
             let mut kids: Vec<usize> = if bvh2.nodes[bin].is_leaf() {
                 vec![bin]
             } else {
                 let l = bvh2.nodes[bin].first_index as usize;
                 vec![l, l + 1]
             };
-            while kids.len() < 4 {
+            while kids.len() < WIDTH {
                 let Some((i, _)) = kids
                     .iter()
                     .enumerate()
@@ -139,21 +155,18 @@ impl Top {
                 kids.push(l);
                 kids.push(l + 1);
             }
-            let mut refs: Vec<Ref> = Vec::with_capacity(4);
+            let mut refs: Vec<Ref> = Vec::with_capacity(WIDTH);
             for &k in &kids {
                 if bvh2.nodes[k].is_leaf() {
                     leaf_ref(k, &mut refs);
                 } else {
                     let idx = top.nodes.len();
-                    top.nodes.push(Node4 {
-                        boxes: Box4::default(),
-                        child: [EMPTY; 4],
-                    });
+                    top.nodes.push(Node8::EMPTY);
                     refs.push(idx as Ref);
                     work.push((k, idx, level + 1));
                 }
             }
-            assert!(refs.len() <= 4, "a leaf holds one primitive");
+            assert!(refs.len() <= WIDTH, "a leaf holds one primitive");
             for (c, r) in refs.into_iter().enumerate() {
                 top.nodes[slot].child[c] = r;
             }
@@ -162,7 +175,7 @@ impl Top {
         let mut content = vec![NONE; top.nodes.len()];
         for n in (0..top.nodes.len()).rev() {
             let mut node = top.nodes[n];
-            for c in 0..4 {
+            for c in 0..WIDTH {
                 let r = node.child[c];
                 let b = if r == EMPTY {
                     continue;
@@ -178,19 +191,50 @@ impl Top {
             }
             top.nodes[n] = node;
         }
+        top.stack = top.stack_need();
         top
+    }
+
+    /// The most entries the walk's stack can hold at once, over every ray. Visiting a node
+    /// pops it and pushes its children met (at most all of them), nearest on top; below the
+    /// deepest entry the rest wait. So a node whose subtree needs `s` entries when reached
+    /// needs `max(children, (children − 1) + max over inner children of their need)`, and
+    /// the root needs its own (one entry on an empty stack when the root is a primitive).
+    pub fn stack_need(&self) -> usize {
+        if self.root == EMPTY {
+            return 0;
+        }
+        if self.root & LEAF != 0 {
+            return 1;
+        }
+        // Children follow their parents: one pass from the back.
+        let mut need = vec![0usize; self.nodes.len()];
+        for n in (0..self.nodes.len()).rev() {
+            let kids = self.nodes[n].child.iter().filter(|&&r| r != EMPTY);
+            let count = kids.clone().count();
+            let deepest = kids
+                .filter(|&&r| r & LEAF == 0)
+                .map(|&r| need[r as usize])
+                .max()
+                .unwrap_or(0);
+            need[n] = count.max(count.saturating_sub(1) + deepest);
+        }
+        need[self.root as usize]
     }
 
     /// Bytes.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node4>()
+        self.nodes.len() * std::mem::size_of::<Node8>()
     }
 
     /// Walks the top level front to back: `visit(prim, tmax)` for each primitive whose box the
     /// ray meets within the current `tmax`, returning the new `tmax` and whether to stop;
-    /// `prefetch(prim)` when a primitive is pushed.
+    /// `prefetch(prim)` when a primitive is pushed. The node test is [`test8`]'s with `AVX2`.
+    ///
+    /// # Safety
+    /// With `AVX2`, the processor must have AVX2.
     #[inline(always)]
-    pub fn walk(
+    pub unsafe fn walk<const AVX2: bool>(
         &self,
         r: &PreparedRay,
         mut tmax: f32,
@@ -215,7 +259,8 @@ impl Top {
                 continue;
             }
             let n = &self.nodes[node as usize];
-            let (mask, d) = test4(&n.boxes, r, tmax);
+            // SAFETY: this function's contract.
+            let (mask, d) = unsafe { test8::<AVX2>(&n.boxes, r, tmax) };
             if mask == 0 {
                 continue;
             }
@@ -235,15 +280,16 @@ impl Top {
 }
 
 #[inline(always)]
-fn prefetch_node(nodes: &[Node4], i: u32) {
+fn prefetch_node(nodes: &[Node8], i: u32) {
     #[cfg(target_arch = "x86_64")]
     if let Some(n) = nodes.get(i as usize) {
         // SAFETY: prefetching a valid reference has no effect on memory.
         unsafe {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let p = n as *const Node4 as *const i8;
-            _mm_prefetch::<_MM_HINT_T0>(p);
-            _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+            let p = n as *const Node8 as *const i8;
+            for l in 0..std::mem::size_of::<Node8>().div_ceil(64) {
+                _mm_prefetch::<_MM_HINT_T0>(p.add(64 * l));
+            }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
@@ -313,6 +359,7 @@ mod tests {
                 })
                 .collect();
             let top = Top::build(&boxes);
+            assert!(top.stack >= top.depth && top.stack <= (WIDTH - 1) * top.depth + 1);
             for i in 0..200 {
                 let o: [f32; 3] = std::array::from_fn(|_| (rng.next_f64() * 14.0 - 2.0) as f32);
                 let d: [f32; 3] = std::array::from_fn(|a| {
@@ -323,21 +370,53 @@ mod tests {
                     }
                 });
                 let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
-                let mut seen = vec![0u32; n];
-                top.walk(
-                    &r,
-                    f32::INFINITY,
-                    |p, t| {
+                #[cfg(target_arch = "x86_64")]
+                let avx = crate::grid::window::has_avx2();
+                #[cfg(not(target_arch = "x86_64"))]
+                let avx = false;
+                for wide in [false, avx] {
+                    let mut seen = vec![0u32; n];
+                    let visit = |p: u32, t| {
                         seen[p as usize] += 1;
                         (t, false)
-                    },
-                    |_| {},
-                );
-                for (p, b) in boxes.iter().enumerate() {
-                    let want = r.hits_box(b[0], b[1], f32::INFINITY);
-                    assert_eq!(seen[p], u32::from(want), "n {n}, ray {i}, prim {p}");
+                    };
+                    // SAFETY: AVX2 only where detected.
+                    unsafe {
+                        if wide {
+                            top.walk::<true>(&r, f32::INFINITY, visit, |_| {});
+                        } else {
+                            top.walk::<false>(&r, f32::INFINITY, visit, |_| {});
+                        }
+                    }
+                    for (p, b) in boxes.iter().enumerate() {
+                        let want = r.hits_box(b[0], b[1], f32::INFINITY);
+                        assert_eq!(seen[p], u32::from(want), "n {n}, ray {i}, prim {p}");
+                    }
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod stack_tests {
+    use super::*;
+
+    /// The stack bound of a hand-built tree: the root has three children, an inner node with
+    /// eight primitives among them (`(3 − 1) + 8`), and a second inner node with two.
+    #[test]
+    fn stack_need_counts_waiting_siblings() {
+        let mut top = Top {
+            nodes: vec![Node8::EMPTY; 3],
+            root: 0,
+            depth: 2,
+            stack: 0,
+        };
+        top.nodes[0].child[..3].copy_from_slice(&[1, LEAF, 2]);
+        top.nodes[1].child = std::array::from_fn(|i| LEAF | i as u32);
+        top.nodes[2].child[..2].copy_from_slice(&[LEAF | 8, LEAF | 9]);
+        assert_eq!(top.stack_need(), 10);
+        top.nodes[1].child[1..].fill(EMPTY);
+        assert_eq!(top.stack_need(), 4);
     }
 }
