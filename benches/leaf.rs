@@ -16,18 +16,6 @@ use std::time::Duration;
 /// Window/ray pairs per iteration.
 const PAIRS: usize = 4096;
 
-/// Rows of a window stored as a block stores them: rows four values apart (the fourth a
-/// stray value), planes twelve apart.
-fn stored(w: &Window) -> Vec<f32> {
-    let mut coords = vec![0f32; 3 * 12 + 4];
-    for a in 0..3 {
-        for k in 0..9 {
-            coords[a * 12 + 4 * (k / 3) + k % 3] = w[a][k];
-        }
-    }
-    coords
-}
-
 fn leaf(c: &mut Criterion) {
     let mut rng = SplitMix64(5);
     let mut pairs = Vec::with_capacity(PAIRS);
@@ -64,19 +52,12 @@ fn leaf(c: &mut Criterion) {
         ];
         let d: [f32; 3] = std::array::from_fn(|a| target[a] - o[a]);
         let r = PreparedRay::new(&Ray::new(o, d)).expect("a non-zero direction");
-        pairs.push((r, w, stored(&w)));
+        pairs.push((r, w, window::lone_coords(&w)));
     }
     let lanes = lane_mask(2, 2);
     let prepared: Vec<(PreparedRay, Window, Rows)> = pairs
         .iter()
-        .map(|(r, w, coords)| {
-            let rows = Rows {
-                coords,
-                plane: 12,
-                offs: [0, 4, 8],
-            };
-            (*r, *w, rows)
-        })
+        .map(|(r, w, coords)| (*r, *w, Rows::lone(coords)))
         .collect();
 
     let mut group = c.benchmark_group("leaf");

@@ -91,15 +91,8 @@ fn displaced_hits_lie_within_the_displaced_error_bound() {
         scale: 0.02,
         file: "smooth.png".into(),
     };
-    let mut state = 99u64;
-    let random: Vec<[f32; 3]> = (0..32 * 32)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            [(state >> 40) as f32 / (1u64 << 24) as f32; 3]
-        })
-        .collect();
+    let mut rng = limitray::harness::rng::SplitMix64(99);
+    let random: Vec<[f32; 3]> = (0..32 * 32).map(|_| [rng.next_f64() as f32; 3]).collect();
     let rough = Displacement::Map {
         texture: std::sync::Arc::new(limitray::texture::image::ImageTexture::from_rgb(
             32, 32, random,

@@ -740,23 +740,11 @@ fn embree_noise_displacement_matches_limitray() {
         .unwrap()
     };
     let (displaced, plain) = (scene(Some((amplitude, frequency))), scene(None));
-    let mut state = 7u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = limitray::harness::rng::SplitMix64(7);
     let (mut same, mut moved) = (Vec::new(), Vec::new());
     for _ in 0..4000 {
-        let d = loop {
-            let v = [next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0];
-            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if l > 0.1 && l <= 1.0 {
-                break v.map(|c| c / l);
-            }
-        };
-        let target = [next() - 0.5, next() - 0.5, next() - 0.5];
+        let d = rng.unit_vector();
+        let target: [f64; 3] = std::array::from_fn(|_| rng.next_f64() - 0.5);
         let origin: [f32; 3] = std::array::from_fn(|k| (target[k] - 6.0 * d[k]) as f32);
         let dir = d.map(|c| c as f32);
         let (Some(a), Some(b), Some(c)) = (

@@ -81,7 +81,29 @@ pub struct Rows<'a> {
     pub offs: [usize; 3],
 }
 
-impl Rows<'_> {
+/// A window stored on its own, for tests and benchmarks of the leaf test outside a mesh: each
+/// plane's three rows four values apart, the planes twelve apart, then four values of padding
+/// (`NaN`, which no lane may read); [`Rows::lone`] reads it.
+pub fn lone_coords(w: &Window) -> Vec<f32> {
+    let mut coords = vec![f32::NAN; 3 * 12 + 4];
+    for a in 0..3 {
+        for k in 0..9 {
+            coords[a * 12 + 4 * (k / 3) + k % 3] = w[a][k];
+        }
+    }
+    coords
+}
+
+impl<'a> Rows<'a> {
+    /// The rows of a window stored by [`lone_coords`].
+    pub fn lone(coords: &'a [f32]) -> Rows<'a> {
+        Rows {
+            coords,
+            plane: 12,
+            offs: [0, 4, 8],
+        }
+    }
+
     /// The nine vertices (row `y`, column `x` at `3 y + x`).
     pub fn gather(&self) -> Window {
         std::array::from_fn(|a| {
@@ -537,17 +559,8 @@ mod tests {
             }
             let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
             // Rows four values apart (the fourth a stray value), planes twelve apart.
-            let mut coords = vec![f32::NAN; 3 * 12 + 4];
-            for a in 0..3 {
-                for k in 0..9 {
-                    coords[a * 12 + 4 * (k / 3) + k % 3] = w[a][k];
-                }
-            }
-            let rows = Rows {
-                coords: &coords,
-                plane: 12,
-                offs: [0, 4, 8],
-            };
+            let coords = lone_coords(&w);
+            let rows = Rows::lone(&coords);
             assert_eq!(rows.gather(), w);
             for tmax in [f32::INFINITY, 0.999, 1.0] {
                 let a = window(&r, &rows, lanes, tmax);
