@@ -138,13 +138,12 @@ struct Best {
     b2: f32,
 }
 
-/// One block's data before it is placed.
-struct BlockData {
+/// A block before it is placed: its region (index in [`DicedMesh::grids`]), its header (no
+/// offsets yet) and the bounds of its vertices.
+struct Planned {
+    region: u32,
+    origin: [usize; 2],
     header: Block,
-    coords: Vec<f32>,
-    normals: Vec<u32>,
-    boxes: Vec<Box4>,
-    levels: Vec<u8>,
     bounds: [[f32; 3]; 2],
 }
 
@@ -166,28 +165,28 @@ fn runs(n: usize) -> Vec<(usize, usize)> {
     out
 }
 
-fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
+/// The diced-mesh vertex at grid vertex `(x, y)` of region `g`, read from its triangles.
+fn region_vertex(d: &DicedMesh, g: &GridRegion, x: usize, y: usize) -> usize {
     let [qc, qr] = g.part.quads.map(|x| x as usize);
-    let tri = |x: usize, y: usize, h: usize| -> usize {
-        g.first_triangle as usize + 2 * (y * qc + x) + h
-    };
-    // Vertex id of grid vertex (x, y) of the region.
-    let vertex = |x: usize, y: usize| -> usize {
-        let (qx, qy) = (x.min(qc - 1), y.min(qr - 1));
-        let t0 = d.triangles[tri(qx, qy, 0)];
-        let t1 = d.triangles[tri(qx, qy, 1)];
-        (match (x > qx, y > qy) {
-            (false, false) => t0[0],
-            (true, false) => t0[1],
-            (true, true) => t0[2],
-            (false, true) => t1[2],
-        }) as usize
-    };
+    let (qx, qy) = (x.min(qc - 1), y.min(qr - 1));
+    let t = g.first_triangle as usize + 2 * (qy * qc + qx);
+    let (t0, t1) = (d.triangles[t], d.triangles[t + 1]);
+    (match (x > qx, y > qy) {
+        (false, false) => t0[0],
+        (true, false) => t0[1],
+        (true, true) => t0[2],
+        (false, true) => t1[2],
+    }) as usize
+}
+
+/// The blocks of region `region` (`g`): headers and bounds, nothing stored yet.
+fn plan_region(d: &DicedMesh, region: usize, g: &GridRegion) -> Vec<Planned> {
+    let [qc, qr] = g.part.quads.map(|x| x as usize);
     let mut out = Vec::new();
     for &(y0, rows) in &runs(qr) {
         for &(x0, cols) in &runs(qc) {
             let header = Block {
-                tri0: tri(x0, y0, 0) as u32,
+                tri0: g.first_triangle + 2 * (y0 * qc + x0) as u32,
                 tri_stride: 2 * qc as u32,
                 face: g.face,
                 k: g.k,
@@ -197,39 +196,20 @@ fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
                 rows: rows as u8,
                 ..Block::default()
             };
-            let nv = header.num_vertices();
-            let mut coords = vec![0f32; 3 * nv];
-            let mut normals = Vec::with_capacity(nv);
             let mut bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
             for y in 0..=rows {
                 for x in 0..=cols {
-                    let v = vertex(x0 + x, y0 + y);
-                    let p = d.positions[v];
+                    let p = d.positions[region_vertex(d, g, x0 + x, y0 + y)];
                     for a in 0..3 {
-                        coords[(3 * y + a) * (cols + 1) + x] = p[a];
                         bounds[0][a] = bounds[0][a].min(p[a]);
                         bounds[1][a] = bounds[1][a].max(p[a]);
                     }
-                    normals.push(oct_encode(d.normals[v]));
                 }
             }
-            let boxes = block_boxes(&header, |x, y| {
-                std::array::from_fn(|a| coords[(3 * y + a) * (cols + 1) + x])
-            });
-            let mut levels = Vec::with_capacity(2 * cols * rows);
-            for y in 0..rows {
-                for x in 0..cols {
-                    for h in 0..2 {
-                        levels.push(d.tri_info[tri(x0 + x, y0 + y, h)].level);
-                    }
-                }
-            }
-            out.push(BlockData {
+            out.push(Planned {
+                region: region as u32,
+                origin: [x0, y0],
                 header,
-                coords,
-                normals,
-                boxes,
-                levels,
                 bounds,
             });
         }
@@ -237,16 +217,59 @@ fn region_blocks(d: &DicedMesh, g: &GridRegion) -> Vec<BlockData> {
     out
 }
 
+/// Where one block's data goes: its slices of [`GridMesh::coords`], `normals`, `boxes` and
+/// `levels`.
+struct BlockSlices<'a> {
+    coords: &'a mut [f32],
+    normals: &'a mut [u32],
+    boxes: &'a mut [Box4],
+    levels: &'a mut [u8],
+}
+
+/// Stores block `p` of `d` into `out`; returns its root node.
+fn fill_block(d: &DicedMesh, p: &Planned, out: BlockSlices) -> Box4 {
+    let g = &d.grids[p.region as usize];
+    let h = &p.header;
+    let (cols, rows) = (h.cols as usize, h.rows as usize);
+    let [x0, y0] = p.origin;
+    for y in 0..=rows {
+        for x in 0..=cols {
+            let v = region_vertex(d, g, x0 + x, y0 + y);
+            let q = d.positions[v];
+            for a in 0..3 {
+                out.coords[(3 * y + a) * (cols + 1) + x] = q[a];
+            }
+            out.normals[y * (cols + 1) + x] = oct_encode(d.normals[v]);
+        }
+    }
+    let coords = &*out.coords;
+    let boxes = block_boxes(h, |x, y| {
+        std::array::from_fn(|a| coords[(3 * y + a) * (cols + 1) + x])
+    });
+    out.boxes.copy_from_slice(&boxes[1..]);
+    for y in 0..rows {
+        for x in 0..cols {
+            for k in 0..2 {
+                out.levels[2 * (y * cols + x) + k] = d.tri_info[h.triangle(x, y, k) as usize].level;
+            }
+        }
+    }
+    boxes[0]
+}
+
 impl GridMesh {
     /// Builds the grid mesh of `d`; the diced mesh is not kept. Blocks and loose triangles
     /// are stored in the order of the top level's leaves. Fails when the mesh needs more than
     /// 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
     pub fn build(d: &DicedMesh) -> Result<GridMesh> {
-        let data: Vec<BlockData> = d
+        // Plan the blocks (headers and bounds) first; their data is stored once, in place, after
+        // the top level has fixed their order.
+        let plans: Vec<Planned> = d
             .grids
             .par_iter()
-            .filter(|g| g.part.quads[0] > 0 && g.part.quads[1] > 0)
-            .map(|g| region_blocks(d, g))
+            .enumerate()
+            .filter(|(_, g)| g.part.quads[0] > 0 && g.part.quads[1] > 0)
+            .map(|(i, g)| plan_region(d, i, g))
             .flatten_iter()
             .collect();
         let mut covered = vec![false; d.triangles.len()];
@@ -259,7 +282,7 @@ impl GridMesh {
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
             ..GridMesh::default()
         };
-        let mut prim_boxes: Vec<[[f32; 3]; 2]> = data.iter().map(|b| b.bounds).collect();
+        let mut prim_boxes: Vec<[[f32; 3]; 2]> = plans.iter().map(|b| b.bounds).collect();
         let mut loose = Vec::new();
         // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
         // domain's zipper triangles are consecutive, side by side).
@@ -303,14 +326,14 @@ impl GridMesh {
                 m.bounds[1][a] = m.bounds[1][a].max(b[1][a]);
             }
         }
-        if data.len() >= 1 << 24 || loose.len() >= 1 << 31 {
+        if plans.len() >= 1 << 24 || loose.len() >= 1 << 31 {
             return Err(Error::new(
                 ErrorKind::Usage,
                 format!(
                     "the diced mesh has {} grid blocks and {} loose triangles: more than the \
                      grid core addresses (2^24 blocks, 2^31 loose triangles); raise the \
                      dicing rate or split the mesh",
-                    data.len(),
+                    plans.len(),
                     loose.len()
                 ),
             ));
@@ -334,31 +357,28 @@ impl GridMesh {
                 stack.extend(top.nodes[r as usize].child.iter().rev());
             }
         }
-        let nblocks = data.len();
-        let mut data: Vec<Option<BlockData>> = data.into_iter().map(Some).collect();
-        let total_coords: usize = data.iter().flatten().map(|b| b.coords.len()).sum();
-        m.coords.reserve(total_coords + 4);
+        let nblocks = plans.len();
         m.blocks.reserve(nblocks);
         m.loose.reserve(loose.len());
         let mut new_id = vec![0u32; bounds.len()];
+        // Each placed block's plan, and the running sizes of the arrays it will be stored in.
+        let mut placed: Vec<usize> = Vec::with_capacity(nblocks);
+        let (mut ncoords, mut nboxes, mut nlevels) = (0usize, 0usize, 0usize);
         for &prim in &order {
             if prim < nblocks {
-                let b = data[prim].take().expect("each block is one leaf");
-                let mut h = b.header;
-                h.root = b.boxes[0];
-                h.vert = m.coords.len() as u32;
-                debug_assert_eq!(h.normal() as usize, m.normals.len());
-                h.boxes = m.boxes.len() as u32;
-                h.level = m.levels.len() as u32;
-                m.coords.extend_from_slice(&b.coords);
-                m.normals.extend_from_slice(&b.normals);
-                m.boxes.extend_from_slice(&b.boxes[1..]);
-                m.levels.extend_from_slice(&b.levels);
+                let mut h = plans[prim].header;
+                h.vert = ncoords as u32;
+                h.boxes = nboxes as u32;
+                h.level = nlevels as u32;
+                ncoords += 3 * h.num_vertices();
+                nboxes += h.num_boxes();
+                nlevels += 2 * h.cols as usize * h.rows as usize;
                 new_id[prim] = m.blocks.len() as u32;
                 m.quadrants
                     .push(if h.two_level() { h.boxes } else { u32::MAX });
                 m.verts.push(h.vert);
                 m.blocks.push(h);
+                placed.push(prim);
             } else {
                 let [first, count] = strips[prim - nblocks];
                 new_id[prim] = (nblocks + m.strips.len()) as u32;
@@ -378,8 +398,37 @@ impl GridMesh {
         for n in &mut top.nodes {
             n.child = n.child.map(|r| renumber(r, &new_id));
         }
-        // Window rows are read four values at a time: the last plane's last row reads past it.
-        m.coords.extend_from_slice(&[0.0; 4]);
+        // Store every block in place, in parallel, each into its own slices. Window rows are read
+        // four values at a time: the last plane's last row reads past it into four zeros.
+        m.coords = vec![0.0; ncoords + 4];
+        m.normals = vec![0; ncoords / 3];
+        m.boxes = vec![Box4::default(); nboxes];
+        m.levels = vec![0; nlevels];
+        let mut jobs = Vec::with_capacity(nblocks);
+        let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
+        let (mut boxes, mut levels) = (&mut m.boxes[..], &mut m.levels[..]);
+        for (h, &prim) in m.blocks.iter_mut().zip(&placed) {
+            let nv = h.num_vertices();
+            let (c, rest) = std::mem::take(&mut coords).split_at_mut(3 * nv);
+            coords = rest;
+            let (n, rest) = std::mem::take(&mut normals).split_at_mut(nv);
+            normals = rest;
+            let (b, rest) = std::mem::take(&mut boxes).split_at_mut(h.num_boxes());
+            boxes = rest;
+            let nl = 2 * h.cols as usize * h.rows as usize;
+            let (l, rest) = std::mem::take(&mut levels).split_at_mut(nl);
+            levels = rest;
+            let out = BlockSlices {
+                coords: c,
+                normals: n,
+                boxes: b,
+                levels: l,
+            };
+            jobs.push((h, &plans[prim], out));
+        }
+        jobs.into_par_iter()
+            .with_min_len(16)
+            .for_each(|(h, plan, out)| h.root = fill_block(d, plan, out));
         m.top = top;
         Ok(m)
     }
