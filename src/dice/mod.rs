@@ -59,7 +59,7 @@ impl Default for DiceOptions {
 }
 
 /// Per-triangle attributes.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TriInfo {
     /// Base face.
     pub face: u32,
@@ -476,76 +476,114 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
         sharp_vertex: &sharp_vertex,
         displace: displacer.as_ref(),
     };
-    let parts: Vec<DomainOut> = domains
+    // Sizes first (patterns only, nothing evaluated), so that every domain then writes its
+    // points and triangles in place, in parallel, with no per-domain buffers to copy.
+    let sizes: Vec<DomainSize> = domains
         .par_chunks(64)
-        .map(|chunk| {
+        .flat_map_iter(|chunk| {
             let mut cache = HashMap::new();
             chunk
                 .iter()
-                .map(|&(f, k)| ctx.domain(f as usize, k as usize, &mut cache))
-                .collect::<Result<Vec<_>>>()
+                .map(|&(f, k)| ctx.domain_size(f as usize, k as usize, &mut cache))
+                .collect::<Vec<_>>()
         })
-        .collect::<Result<Vec<_>>>()?
-        .into_iter()
-        .flatten()
         .collect();
-
-    let mut out = DicedMesh::default();
-    let total_points = shared.points.len() + parts.iter().map(|p| p.points.len()).sum::<usize>();
-    let total_tris: usize = parts.iter().map(|p| p.triangles.len()).sum();
-    out.positions.reserve(total_points);
-    out.triangles.reserve(total_tris);
-    out.tri_info.reserve(total_tris);
-    for p in &shared.points {
-        out.positions.push(p.p);
-        out.normals.push(p.n);
-        out.params.push(p.param);
-    }
-    for part in parts {
-        let base = out.positions.len() as u32;
-        if let Some(g) = part.grid {
-            out.grids.push(GridRegion {
-                first_triangle: out.triangles.len() as u32,
-                face: part.face,
-                k: part.k,
-                part: g,
-            });
-        }
-        for p in &part.points {
-            out.positions.push(p.p);
-            out.normals.push(p.n);
-            out.params.push(p.param);
-        }
-        for (t, info) in part.triangles.iter().zip(part.tri_info) {
-            out.triangles.push(t.map(|i| {
-                if i & LOCAL != 0 {
-                    base + (i & !LOCAL)
-                } else {
-                    i
-                }
-            }));
-            out.tri_info.push(info);
-        }
-    }
-    if u32::try_from(out.positions.len()).is_err() {
+    let total_points = shared.points.len() + sizes.iter().map(|z| z.points).sum::<usize>();
+    let total_tris: usize = sizes.iter().map(|z| z.triangles).sum();
+    if u32::try_from(total_points).is_err() || total_points as u64 >= LOCAL as u64 {
         return Err(Error::new(
             ErrorKind::Usage,
-            "diced mesh exceeds 2^32 vertices",
+            "diced mesh exceeds 2^31 vertices",
         ));
     }
+    let mut out = DicedMesh {
+        positions: vec![[0.0; 3]; total_points],
+        normals: vec![[0.0; 3]; total_points],
+        params: vec![FaceCoord::default(); total_points],
+        triangles: vec![[0; 3]; total_tris],
+        tri_info: vec![TriInfo::default(); total_tris],
+        grids: Vec::new(),
+    };
+    for (i, q) in shared.points.iter().enumerate() {
+        out.positions[i] = q.p;
+        out.normals[i] = q.n;
+        out.params[i] = q.param;
+    }
+    let mut jobs = Vec::with_capacity(domains.len());
+    {
+        let n = shared.points.len();
+        let (mut positions, mut normals) = (&mut out.positions[n..], &mut out.normals[n..]);
+        let mut params = &mut out.params[n..];
+        let (mut triangles, mut tri_info) = (&mut out.triangles[..], &mut out.tri_info[..]);
+        let (mut base, mut first_triangle) = (n as u32, 0u32);
+        for (&(f, k), z) in domains.iter().zip(&sizes) {
+            if let Some(g) = z.grid {
+                out.grids.push(GridRegion {
+                    first_triangle,
+                    face: f,
+                    k,
+                    part: g,
+                });
+            }
+            let slices = DomainSlices {
+                base,
+                positions: split_off(&mut positions, z.points),
+                normals: split_off(&mut normals, z.points),
+                params: split_off(&mut params, z.points),
+                triangles: split_off(&mut triangles, z.triangles),
+                tri_info: split_off(&mut tri_info, z.triangles),
+            };
+            base += z.points as u32;
+            first_triangle += z.triangles as u32;
+            jobs.push((f, k, slices));
+        }
+    }
+    jobs.into_par_iter()
+        .with_min_len(64)
+        .try_for_each_init(HashMap::new, |cache, (f, k, slices)| {
+            ctx.domain(f as usize, k as usize, cache, slices)
+        })?;
     Ok(out)
 }
 
-/// Flag of a domain-local vertex index in [`DomainOut::triangles`].
+/// The first `n` items of `rest`, which keeps the others.
+fn split_off<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+    let (head, tail) = std::mem::take(rest).split_at_mut(n);
+    *rest = tail;
+    head
+}
+
+/// Flag of a domain-local vertex index in a domain's triangles before they are stored.
 const LOCAL: u32 = 1 << 31;
 
-struct DomainOut {
-    face: u32,
-    k: u32,
+/// What a domain adds to the diced mesh.
+struct DomainSize {
+    /// Points of its own: seam copies, then the interior.
+    points: usize,
+    /// Triangles.
+    triangles: usize,
+    /// Its regular grid, if any.
     grid: Option<GridPart>,
-    points: Vec<Point>,
-    triangles: Vec<[u32; 3]>,
-    tri_info: Vec<TriInfo>,
+}
+
+/// Where a domain stores its points and triangles in the diced mesh.
+struct DomainSlices<'a> {
+    /// Index of its first point.
+    base: u32,
+    positions: &'a mut [[f32; 3]],
+    normals: &'a mut [[f32; 3]],
+    params: &'a mut [FaceCoord],
+    triangles: &'a mut [[u32; 3]],
+    tri_info: &'a mut [TriInfo],
+}
+
+impl DomainSlices<'_> {
+    /// Stores the domain's point `i`.
+    fn put(&mut self, i: usize, q: Point) {
+        self.positions[i] = q.p;
+        self.normals[i] = q.n;
+        self.params[i] = q.param;
+    }
 }
 
 struct DomainCtx<'a> {
@@ -614,28 +652,36 @@ impl DomainCtx<'_> {
         pts
     }
 
-    /// The interior points of domain `(f, k)` (the lattice of `pat`), evaluated at once when
-    /// the domain is one B-spline patch and undisplaced ([`PatchTable::eval_domain_lattice`]:
-    /// the same bits as point by point); `false`, with nothing pushed, otherwise.
-    fn lattice(&self, f: usize, k: usize, pat: &Pattern, points: &mut Vec<Point>) -> Result<bool> {
+    /// The interior points of domain `(f, k)` (the lattice of `pat`, `put(i, point)` for the
+    /// `i`-th), evaluated at once when the domain is one B-spline patch and undisplaced
+    /// ([`PatchTable::eval_domain_lattice`]: the same bits as point by point); `false`, with
+    /// nothing put, otherwise.
+    fn lattice(
+        &self,
+        f: usize,
+        k: usize,
+        pat: &Pattern,
+        mut put: impl FnMut(usize, Point),
+    ) -> Result<bool> {
         if self.displace.is_some() || pat.interior.is_empty() {
             return Ok(false);
         }
         let nu = pat.rates[0].max(pat.rates[2]);
         let nv = pat.rates[1].max(pat.rates[3]);
         debug_assert_eq!(pat.interior.len(), ((nu - 1) * (nv - 1)) as usize);
-        let first = points.len();
+        let mut i = 0;
         let mut failed = None;
         let done = self.table.eval_domain_lattice(f, k, nu, nv, |pt| {
             if failed.is_some() {
                 return;
             }
-            let [u, v] = pat.interior[points.len() - first];
+            let [u, v] = pat.interior[i];
             let at = FaceCoord::new(f as u32, k as u32, u, v);
             match unit_normal(self.table, at, pt.du, pt.dv).and_then(|n| rounded(at, pt.p, n)) {
-                Ok(q) => points.push(q),
+                Ok(q) => put(i, q),
                 Err(e) => failed = Some(e),
             }
+            i += 1;
         });
         match failed {
             Some(e) => Err(e),
@@ -643,15 +689,11 @@ impl DomainCtx<'_> {
         }
     }
 
-    fn domain(
-        &self,
-        f: usize,
-        k: usize,
-        cache: &mut HashMap<[u32; 4], Pattern>,
-    ) -> Result<DomainOut> {
+    /// The points of the four sides of domain `(f, k)`, each from its start to its end.
+    fn sides(&self, f: usize, k: usize) -> [Vec<SidePoint>; 4] {
         let topo = &self.level.topo;
         let n = topo.face_size(f);
-        let sides: [Vec<SidePoint>; 4] = if n == 4 {
+        if n == 4 {
             std::array::from_fn(|m| self.face_edge_points(f, m))
         } else {
             let ek = self.face_edge_points(f, k);
@@ -665,52 +707,79 @@ impl DomainCtx<'_> {
                 s2,
                 ep[ep.len() / 2..].to_vec(),
             ]
-        };
+        }
+    }
+
+    /// Whether side point `sp` of domain `(f, k)` is a seam vertex owned by another domain
+    /// (the domain stores a copy of its own).
+    fn foreign_seam(&self, f: usize, k: usize, sp: SidePoint) -> bool {
+        let owner = self.shared.points[sp.index as usize].param;
+        sp.seam && (owner.face as usize != f || owner.k as usize != k)
+    }
+
+    /// What domain `(f, k)` adds to the diced mesh (nothing is evaluated).
+    fn domain_size(
+        &self,
+        f: usize,
+        k: usize,
+        cache: &mut HashMap<[u32; 4], Pattern>,
+    ) -> DomainSize {
+        let sides = self.sides(f, k);
+        let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
+        let pat = cache.entry(rates).or_insert_with(|| pattern(rates));
+        let copies = sides
+            .iter()
+            .flat_map(|side| &side[..side.len() - 1])
+            .filter(|&&sp| self.foreign_seam(f, k, sp))
+            .count();
+        DomainSize {
+            points: copies + pat.interior.len(),
+            triangles: pat.triangles.len(),
+            grid: pat.grid,
+        }
+    }
+
+    /// Evaluates domain `(f, k)` into `out` (sized by [`Self::domain_size`]).
+    fn domain(
+        &self,
+        f: usize,
+        k: usize,
+        cache: &mut HashMap<[u32; 4], Pattern>,
+        mut out: DomainSlices,
+    ) -> Result<()> {
+        let sides = self.sides(f, k);
         let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
         let pat = cache.entry(rates).or_insert_with(|| pattern(rates));
         let ring = pat.ring_len();
-        let mut out = DomainOut {
-            face: f as u32,
-            k: k as u32,
-            grid: pat.grid,
-            points: Vec::with_capacity(pat.interior.len()),
-            triangles: Vec::with_capacity(pat.triangles.len()),
-            tri_info: Vec::with_capacity(pat.triangles.len()),
-        };
         // Map pattern indices to vertex indices.
         let mut map: Vec<u32> = Vec::with_capacity(ring + pat.interior.len());
+        let mut own = 0;
         for (s, side) in sides.iter().enumerate() {
-            for (j, sp) in side[..side.len() - 1].iter().enumerate() {
-                let owner = self.shared.points[sp.index as usize].param;
-                if sp.seam && (owner.face as usize != f || owner.k as usize != k) {
+            for (j, &sp) in side[..side.len() - 1].iter().enumerate() {
+                if self.foreign_seam(f, k, sp) {
                     // A seam vertex owned by another domain: copy its position, own normal.
                     let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
                     let mut q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
                     q.p = self.shared.points[sp.index as usize].p;
-                    map.push(LOCAL | out.points.len() as u32);
-                    out.points.push(q);
+                    map.push(LOCAL | own as u32);
+                    out.put(own, q);
+                    own += 1;
                 } else {
                     map.push(sp.index);
                 }
             }
         }
-        let first = out.points.len();
+        let first = own;
         map.extend((0..pat.interior.len()).map(|i| LOCAL | (first + i) as u32));
-        if !self.lattice(f, k, pat, &mut out.points)? {
-            for &[u, v] in &pat.interior {
-                out.points.push(eval_point(
-                    self.table,
-                    self.displace,
-                    f as u32,
-                    k as u32,
-                    u,
-                    v,
-                )?);
+        if !self.lattice(f, k, pat, |i, q| out.put(first + i, q))? {
+            for (i, &[u, v]) in pat.interior.iter().enumerate() {
+                let q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
+                out.put(first + i, q);
             }
         }
         // A domain that is one patch has one level (no lookup per triangle).
         let whole = self.table.domain_level(f, k);
-        for t in &pat.triangles {
+        for (ti, t) in pat.triangles.iter().enumerate() {
             let uv = t.map(|i| pat.uv(i as usize));
             let (cu, cv) = (
                 (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
@@ -722,14 +791,21 @@ impl DomainCtx<'_> {
                     .table
                     .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?,
             };
-            out.triangles.push(t.map(|i| map[i as usize]));
-            out.tri_info.push(TriInfo {
+            out.triangles[ti] = t.map(|i| {
+                let v = map[i as usize];
+                if v & LOCAL != 0 {
+                    out.base + (v & !LOCAL)
+                } else {
+                    v
+                }
+            });
+            out.tri_info[ti] = TriInfo {
                 face: f as u32,
                 k: k as u32,
                 level,
                 uv: uv.map(|p| [p[0] as f32, p[1] as f32]),
-            });
+            };
         }
-        Ok(out)
+        Ok(())
     }
 }
