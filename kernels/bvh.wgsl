@@ -376,7 +376,7 @@ fn test8(bx: u32, r: PRay, tmax: f32) -> Box8Hit {
     var out: Box8Hit;
     out.mask = 0u;
     for (var c = 0u; c < TOP_WIDTH; c++) {
-        let se = slab(bx + c, BOX8_HI, TOP_WIDTH, r, tmax);
+        let se = slab(bx + c, BOX_HI, TOP_WIDTH, r, tmax);
         if (se.x <= se.y) {
             out.mask |= 1u << c;
         }

@@ -8,15 +8,15 @@
 use crate::bvh::mesh::WideBoxes;
 use crate::bvh::SceneBvh;
 use crate::error::{Error, ErrorKind, Result};
-use crate::grid::node::{Box4, Box8};
+use crate::grid::node::Box4;
 use crate::grid::GridMesh;
 use wgpu::util::DeviceExt;
 
 use super::layout::{
     BLK_BOXES, BLK_DIMS, BLK_NORMAL, BLK_ROOT, BLK_TRI0, BLK_TRI_STRIDE, BLK_VERT, BLK_WORDS,
-    BOX4_WORDS, BOX8_WORDS, GEO_CHUNKS, GRID_STACK_MAX, INSTANCE_WORDS, INST_MESH, INST_XFORM,
-    MESH_BLOCK_OFF, MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_STRIP_OFF, MESH_TOP_OFF,
-    MESH_WORDS, TRAVERSAL_STACK,
+    BOX4_WORDS, GEO_CHUNKS, GRID_STACK_MAX, INSTANCE_WORDS, INST_MESH, INST_XFORM, MESH_BLOCK_OFF,
+    MESH_LOOSE_OFF, MESH_NBLOCKS, MESH_ROOT, MESH_STRIP_OFF, MESH_TOP_OFF, MESH_WORDS,
+    TRAVERSAL_STACK,
 };
 use super::GpuContext;
 
@@ -72,15 +72,6 @@ fn box4_words(b: &Box4) -> [u32; BOX4_WORDS] {
     })
 }
 
-/// A `Box8`'s words: `lo[axis][child]`, then `hi`.
-fn box8_words(b: &Box8) -> [u32; BOX8_WORDS] {
-    std::array::from_fn(|i| {
-        let side = if i < BOX8_WORDS / 2 { &b.lo } else { &b.hi };
-        let j = i % (BOX8_WORDS / 2);
-        side[j / 8][j % 8].to_bits()
-    })
-}
-
 fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &GridMesh) -> Result<()> {
     if m.top.stack > GRID_STACK_MAX as usize {
         return Err(Error::new(
@@ -94,7 +85,7 @@ fn push_mesh(words: &mut Vec<u32>, rec: usize, m: &GridMesh) -> Result<()> {
     }
     let top_off = offset(words)?;
     for n in &m.top.nodes {
-        words.extend_from_slice(&box8_words(&n.boxes));
+        push_boxes(words, std::slice::from_ref(&n.boxes));
         words.extend_from_slice(&n.child);
     }
     let coord_off = offset(words)?;

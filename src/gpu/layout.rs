@@ -77,18 +77,13 @@ shared_consts! {
     /// Offset of the upper corners in a `Box4`.
     BOX4_HI: usize = 12;
 
-    // ---- Eight boxes (`Box8`): lo[axis][child], then hi[axis][child].
-    /// Words of a `Box8`.
-    BOX8_WORDS: usize = 48;
-    /// Offset of the upper corners in a `Box8`.
-    BOX8_HI: usize = 24;
-
-    // ---- Grid top-level node (`Node8`): a `Box8`, then eight child references.
+    // ---- Grid top-level node (`Node8`): a `Box8` (the layout of `WideBoxes`, `BOX_WORDS`
+    // words), then eight child references.
     /// Children per top-level node.
     TOP_WIDTH: u32 = crate::grid::top::WIDTH as u32;
     /// Words per top-level node.
     TOP_WORDS: usize = 56;
-    /// Node: first child reference.
+    /// Node: first child reference (after the boxes).
     TOP_CHILD: usize = 48;
     /// A child reference to a primitive (block or loose triangle).
     TOP_LEAF: u32 = crate::grid::top::LEAF;
@@ -452,8 +447,8 @@ const _: () = {
     assert!(BOX_HI == 3 * NODE_CHILDREN);
     assert!(size_of::<crate::grid::node::Box4>() == BOX4_WORDS * 4);
     assert!(offset_of!(crate::grid::node::Box4, hi) == BOX4_HI * 4);
-    assert!(size_of::<crate::grid::node::Box8>() == BOX8_WORDS * 4);
-    assert!(offset_of!(crate::grid::node::Box8, hi) == BOX8_HI * 4);
+    assert!(offset_of!(crate::bvh::mesh::WideBoxes, hi) == BOX_HI * 4);
+    assert!(TOP_CHILD == BOX_WORDS);
     assert!(size_of::<crate::grid::top::Node8>() == TOP_WORDS * 4);
     assert!(offset_of!(crate::grid::top::Node8, child) == TOP_CHILD * 4);
     assert!(BLK_NORMAL < BLK_WORDS && LOOSE_ID < LOOSE_WORDS);

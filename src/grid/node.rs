@@ -3,6 +3,10 @@
 
 use crate::bvh::triangle::{PreparedRay, GAMMA3};
 
+/// Eight axis-aligned boxes, structure of arrays, as [`Box4`]: the child boxes of a top-level
+/// node. The same type as the triangle BVH's exact child boxes.
+pub use crate::bvh::mesh::WideBoxes as Box8;
+
 /// Four axis-aligned boxes, structure of arrays; an absent child is the empty box
 /// (`lo = +∞`, `hi = −∞`), which no ray meets.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,40 +27,67 @@ impl Default for Box4 {
     }
 }
 
+/// Grows child `c` of the boxes `lo`, `hi` to contain point `p`.
+fn include<const N: usize>(lo: &mut [[f32; N]; 3], hi: &mut [[f32; N]; 3], c: usize, p: [f32; 3]) {
+    for a in 0..3 {
+        lo[a][c] = lo[a][c].min(p[a]);
+        hi[a][c] = hi[a][c].max(p[a]);
+    }
+}
+
+/// Bounds of child `c` of the boxes `lo`, `hi` (`[lo, hi]`).
+fn child<const N: usize>(lo: &[[f32; N]; 3], hi: &[[f32; N]; 3], c: usize) -> [[f32; 3]; 2] {
+    [
+        std::array::from_fn(|a| lo[a][c]),
+        std::array::from_fn(|a| hi[a][c]),
+    ]
+}
+
 impl Box4 {
     /// Grows child `c` to contain point `p`.
     pub fn include(&mut self, c: usize, p: [f32; 3]) {
-        for a in 0..3 {
-            self.lo[a][c] = self.lo[a][c].min(p[a]);
-            self.hi[a][c] = self.hi[a][c].max(p[a]);
-        }
+        include(&mut self.lo, &mut self.hi, c, p);
     }
 
     /// Bounds of child `c` (`[lo, hi]`).
     pub fn child(&self, c: usize) -> [[f32; 3]; 2] {
-        [
-            std::array::from_fn(|a| self.lo[a][c]),
-            std::array::from_fn(|a| self.hi[a][c]),
-        ]
+        child(&self.lo, &self.hi, c)
     }
 }
 
-/// Reference: [`PreparedRay::hits_box`] on each child; bit `c` set for a child met within
-/// `tmax`, with its entry distance.
-pub fn test4_scalar(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
+impl Box8 {
+    /// Grows child `c` to contain point `p`.
+    pub fn include(&mut self, c: usize, p: [f32; 3]) {
+        include(&mut self.lo, &mut self.hi, c, p);
+    }
+
+    /// Bounds of child `c` (`[lo, hi]`).
+    pub fn child(&self, c: usize) -> [[f32; 3]; 2] {
+        child(&self.lo, &self.hi, c)
+    }
+}
+
+/// [`PreparedRay::hits_box`] on each of the `N` boxes `lo`, `hi`: bit `c` set for a child
+/// met within `tmax`, with its entry distance.
+fn test_scalar<const N: usize>(
+    lo: &[[f32; N]; 3],
+    hi: &[[f32; N]; 3],
+    r: &PreparedRay,
+    tmax: f32,
+) -> (u32, [f32; N]) {
     let mut mask = 0;
-    let mut near = [0f32; 4];
-    for c in 0..4 {
+    let mut near = [0f32; N];
+    for c in 0..N {
         let mut n = r.tmin;
         let mut f = tmax;
         for a in 0..3 {
-            let (lo, hi) = if r.inv[a].is_sign_negative() {
-                (b.hi[a][c], b.lo[a][c])
+            let (l, h) = if r.inv[a].is_sign_negative() {
+                (hi[a][c], lo[a][c])
             } else {
-                (b.lo[a][c], b.hi[a][c])
+                (lo[a][c], hi[a][c])
             };
-            let tn = (lo - r.o[a]) * r.inv[a];
-            let tf = (hi - r.o[a]) * r.inv[a] * (1.0 + 2.0 * GAMMA3);
+            let tn = (l - r.o[a]) * r.inv[a];
+            let tf = (h - r.o[a]) * r.inv[a] * (1.0 + 2.0 * GAMMA3);
             n = n.max(tn);
             f = f.min(tf);
         }
@@ -68,24 +99,44 @@ pub fn test4_scalar(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
     (mask, near)
 }
 
-/// [`test4_scalar`] with SSE2 where available, bit for bit (`max`/`min` keep the bound when
-/// the slab distance is NaN, as `f32::max` does).
+/// Reference: [`PreparedRay::hits_box`] on each child; bit `c` set for a child met within
+/// `tmax`, with its entry distance.
+pub fn test4_scalar(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
+    test_scalar(&b.lo, &b.hi, r, tmax)
+}
+
+/// Reference for [`test8`]: [`PreparedRay::hits_box`] on each of the eight children.
+pub fn test8_scalar(b: &Box8, r: &PreparedRay, tmax: f32) -> (u32, [f32; 8]) {
+    test_scalar(&b.lo, &b.hi, r, tmax)
+}
+
+/// [`test_scalar`] with SSE2 on the four boxes whose lower corners start at `lo[axis]` and
+/// upper at `hi[axis]` (16-byte aligned): the mask, and the entry distances stored at `near`.
+///
+/// # Safety
+/// Each pointer must address four aligned `f32`s, and `near` four writable ones.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn test4(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of the x86_64 baseline.
+unsafe fn test_quad(
+    lo: [*const f32; 3],
+    hi: [*const f32; 3],
+    r: &PreparedRay,
+    tmax: f32,
+    near_out: *mut f32,
+) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of the x86_64 baseline; the pointers as this function's contract.
     unsafe {
-        use std::arch::x86_64::*;
         let scale = _mm_set1_ps(1.0 + 2.0 * GAMMA3);
         let mut near = _mm_set1_ps(r.tmin);
         let mut far = _mm_set1_ps(tmax);
         for a in 0..3 {
-            let lo = _mm_load_ps(b.lo[a].as_ptr());
-            let hi = _mm_load_ps(b.hi[a].as_ptr());
+            let l = _mm_load_ps(lo[a]);
+            let h = _mm_load_ps(hi[a]);
             let (n, f) = if r.inv[a].is_sign_negative() {
-                (hi, lo)
+                (h, l)
             } else {
-                (lo, hi)
+                (l, h)
             };
             let o = _mm_set1_ps(r.o[a]);
             let inv = _mm_set1_ps(r.inv[a]);
@@ -94,10 +145,23 @@ pub fn test4(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
             near = _mm_max_ps(tn, near);
             far = _mm_min_ps(tf, far);
         }
-        let mask = _mm_movemask_ps(_mm_cmple_ps(near, far)) as u32;
-        let mut out = [0f32; 4];
-        _mm_storeu_ps(out.as_mut_ptr(), near);
-        (mask, out)
+        _mm_storeu_ps(near_out, near);
+        _mm_movemask_ps(_mm_cmple_ps(near, far)) as u32
+    }
+}
+
+/// [`test4_scalar`] with SSE2 where available, bit for bit (`max`/`min` keep the bound when
+/// the slab distance is NaN, as `f32::max` does).
+#[inline(always)]
+pub fn test4(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let mut near = [0f32; 4];
+        let lo = b.lo.each_ref().map(|x| x.as_ptr());
+        let hi = b.hi.each_ref().map(|x| x.as_ptr());
+        // SAFETY: `Box4` is 16-byte aligned, so each row of four is.
+        let mask = unsafe { test_quad(lo, hi, r, tmax, near.as_mut_ptr()) };
+        (mask, near)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -124,71 +188,6 @@ pub fn front_to_back<const N: usize>(mask: u32, near: &[f32; N]) -> ([u8; N], us
         n += 1;
     }
     (order, n)
-}
-
-/// Eight axis-aligned boxes, structure of arrays, as [`Box4`]: the child boxes of a top-level
-/// node.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-pub struct Box8 {
-    /// Lower corners: `lo[axis][child]`.
-    pub lo: [[f32; 8]; 3],
-    /// Upper corners.
-    pub hi: [[f32; 8]; 3],
-}
-
-impl Default for Box8 {
-    fn default() -> Self {
-        Box8 {
-            lo: [[f32::INFINITY; 8]; 3],
-            hi: [[f32::NEG_INFINITY; 8]; 3],
-        }
-    }
-}
-
-impl Box8 {
-    /// Grows child `c` to contain point `p`.
-    pub fn include(&mut self, c: usize, p: [f32; 3]) {
-        for a in 0..3 {
-            self.lo[a][c] = self.lo[a][c].min(p[a]);
-            self.hi[a][c] = self.hi[a][c].max(p[a]);
-        }
-    }
-
-    /// Bounds of child `c` (`[lo, hi]`).
-    pub fn child(&self, c: usize) -> [[f32; 3]; 2] {
-        [
-            std::array::from_fn(|a| self.lo[a][c]),
-            std::array::from_fn(|a| self.hi[a][c]),
-        ]
-    }
-}
-
-/// Reference for [`test8`]: [`PreparedRay::hits_box`] on each of the eight children, as
-/// [`test4_scalar`].
-pub fn test8_scalar(b: &Box8, r: &PreparedRay, tmax: f32) -> (u32, [f32; 8]) {
-    let mut mask = 0;
-    let mut near = [0f32; 8];
-    for c in 0..8 {
-        let mut n = r.tmin;
-        let mut f = tmax;
-        for a in 0..3 {
-            let (lo, hi) = if r.inv[a].is_sign_negative() {
-                (b.hi[a][c], b.lo[a][c])
-            } else {
-                (b.lo[a][c], b.hi[a][c])
-            };
-            let tn = (lo - r.o[a]) * r.inv[a];
-            let tf = (hi - r.o[a]) * r.inv[a] * (1.0 + 2.0 * GAMMA3);
-            n = n.max(tn);
-            f = f.min(tf);
-        }
-        if n <= f {
-            mask |= 1 << c;
-        }
-        near[c] = n;
-    }
-    (mask, near)
 }
 
 /// [`test8_scalar`] bit for bit: one AVX2 pass with `AVX2`, else two SSE2 halves (the
@@ -228,34 +227,16 @@ pub unsafe fn test8<const AVX2: bool>(b: &Box8, r: &PreparedRay, tmax: f32) -> (
                 return (mask, out);
             }
         }
-        // SAFETY: SSE2 is part of the x86_64 baseline; `Box8` is 32-byte aligned, so each
-        // half is 16-byte aligned.
-        unsafe {
-            let scale = _mm_set1_ps(1.0 + 2.0 * GAMMA3);
-            let mut mask = 0;
-            for half in 0..2 {
-                let mut near = _mm_set1_ps(r.tmin);
-                let mut far = _mm_set1_ps(tmax);
-                for a in 0..3 {
-                    let lo = _mm_load_ps(b.lo[a].as_ptr().add(4 * half));
-                    let hi = _mm_load_ps(b.hi[a].as_ptr().add(4 * half));
-                    let (n, f) = if r.inv[a].is_sign_negative() {
-                        (hi, lo)
-                    } else {
-                        (lo, hi)
-                    };
-                    let o = _mm_set1_ps(r.o[a]);
-                    let inv = _mm_set1_ps(r.inv[a]);
-                    let tn = _mm_mul_ps(_mm_sub_ps(n, o), inv);
-                    let tf = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(f, o), inv), scale);
-                    near = _mm_max_ps(tn, near);
-                    far = _mm_min_ps(tf, far);
-                }
-                mask |= (_mm_movemask_ps(_mm_cmple_ps(near, far)) as u32) << (4 * half);
-                _mm_storeu_ps(out.as_mut_ptr().add(4 * half), near);
+        let mut mask = 0;
+        for half in 0..2 {
+            // SAFETY: `Box8` is 32-byte aligned, so each half row of four is 16-byte aligned.
+            unsafe {
+                let lo = b.lo.each_ref().map(|x| x.as_ptr().add(4 * half));
+                let hi = b.hi.each_ref().map(|x| x.as_ptr().add(4 * half));
+                mask |= test_quad(lo, hi, r, tmax, out.as_mut_ptr().add(4 * half)) << (4 * half);
             }
-            (mask, out)
         }
+        (mask, out)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -269,55 +250,12 @@ mod tests {
     use crate::bvh::Ray;
     use crate::harness::rng::SplitMix64;
 
-    #[test]
-    fn sse_box_test_matches_scalar() {
-        let mut rng = SplitMix64(9);
-        let mut f = |s: f64| ((rng.next_f64() - 0.5) * s) as f32;
-        for i in 0..20000 {
-            let mut b = Box4::default();
-            for c in 0..4 {
-                if (i + c) % 5 == 0 {
-                    continue;
-                }
-                for a in 0..3 {
-                    let (x, y) = (f(4.0), f(4.0));
-                    b.lo[a][c] = x.min(y);
-                    b.hi[a][c] = x.max(y);
-                }
-            }
-            let mut d = [f(2.0), f(2.0), f(2.0)];
-            if i % 4 == 0 {
-                d[i % 3] = 0.0;
-            }
-            if d == [0.0; 3] {
-                d[0] = 1.0;
-            }
-            let mut o = [f(8.0), f(8.0), f(8.0)];
-            if i % 5 == 0 && b.lo[i % 3][1].is_finite() {
-                o[i % 3] = b.lo[i % 3][1];
-            }
-            let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
-            for tmax in [f32::INFINITY, 1.0] {
-                let (m1, n1) = test4(&b, &r, tmax);
-                let (m2, n2) = test4_scalar(&b, &r, tmax);
-                assert_eq!(m1, m2);
-                for c in 0..4 {
-                    if m1 & (1 << c) != 0 {
-                        assert_eq!(n1[c].to_bits(), n2[c].to_bits());
-                    }
-                    // The scalar test is `hits_box`.
-                    let [lo, hi] = b.child(c);
-                    assert_eq!(m2 & (1 << c) != 0, r.hits_box(lo, hi, tmax));
-                }
-            }
-        }
-    }
-
     /// The eight-box test matches the scalar reference bit for bit, with AVX2 (when the
-    /// processor has it) and with two SSE2 halves, on random boxes, absent children, axis-
-    /// parallel rays and origins on a face.
+    /// processor has it) and with two SSE2 halves, and so does the four-box test on the first
+    /// four boxes; on random boxes, absent children, axis-parallel rays and origins on a face.
+    /// The scalar tests are `hits_box`.
     #[test]
-    fn box8_tests_match_scalar() {
+    fn box_tests_match_scalar() {
         let mut rng = SplitMix64(19);
         let mut f = |s: f64| ((rng.next_f64() - 0.5) * s) as f32;
         for i in 0..20000 {
@@ -344,8 +282,21 @@ mod tests {
                 o[i % 3] = b.lo[i % 3][6];
             }
             let r = PreparedRay::new(&Ray::new(o, d)).unwrap();
+            let b4 = Box4 {
+                lo: b.lo.map(|x| std::array::from_fn(|c| x[c])),
+                hi: b.hi.map(|x| std::array::from_fn(|c| x[c])),
+            };
             for tmax in [f32::INFINITY, 1.0] {
                 let (m2, n2) = test8_scalar(&b, &r, tmax);
+                let (m4, n4) = test4_scalar(&b4, &r, tmax);
+                let (m1, n1) = test4(&b4, &r, tmax);
+                assert_eq!((m1, n1.map(f32::to_bits)), (m4, n4.map(f32::to_bits)));
+                assert_eq!(m4, m2 & 0xf);
+                for c in 0..4 {
+                    if m4 & (1 << c) != 0 {
+                        assert_eq!(n4[c].to_bits(), n2[c].to_bits());
+                    }
+                }
                 #[cfg(target_arch = "x86_64")]
                 let avx = crate::grid::window::has_avx2();
                 #[cfg(not(target_arch = "x86_64"))]
