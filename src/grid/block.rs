@@ -168,7 +168,9 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
         x = (1.0 - ay) * if x >= 0.0 { 1.0 } else { -1.0 };
         y = (1.0 - ax) * if y >= 0.0 { 1.0 } else { -1.0 };
     }
-    let q = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).floor() as u32;
+    // The cast truncates, which is `floor` on these non-negative values (without SSE4.1's
+    // `roundss`, `floor` is a call into libm).
+    let q = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0) as u32;
     let (qx, qy) = (q(x), q(y));
     let (qx1, qy1) = ((qx + 1).min(65535), (qy + 1).min(65535));
     // The candidates' coordinates before folding, each computed once ([`oct_direction`]).
