@@ -267,7 +267,7 @@ fn unit_normal(table: &PatchTable, at: FaceCoord, du: [f64; 3], dv: [f64; 3]) ->
     let scale = norm(du) * norm(dv);
     if norm(n).is_nan() || norm(n) <= 1e-10 * scale {
         let (u2, v2) = (at.u + (0.5 - at.u) * 1e-4, at.v + (0.5 - at.v) * 1e-4);
-        let s2 = table.eval(FaceCoord::new(at.face, at.k, u2, v2))?;
+        let s2 = table.eval_d1(FaceCoord::new(at.face, at.k, u2, v2))?;
         n = cross(s2.du, s2.dv);
     }
     let l = norm(n);
@@ -289,10 +289,16 @@ fn eval_point(
     v: f64,
 ) -> Result<Point> {
     let at = FaceCoord::new(face, k, u, v);
-    let (s, n) = limit_frame(table, at)?;
     let (p, n) = match displace {
-        Some(d) => d.apply(&s, n, at)?,
-        None => (s.p, n),
+        Some(d) => {
+            let (s, n) = limit_frame(table, at)?;
+            d.apply(&s, n, at)?
+        }
+        None => {
+            // Position and first derivatives only: the same bits as `limit_frame`'s.
+            let pt = table.eval_d1(at)?;
+            (pt.p, unit_normal(table, at, pt.du, pt.dv)?)
+        }
     };
     rounded(at, p, n)
 }

@@ -221,6 +221,28 @@ pub fn eval(cp: &ControlGrid, u: f64, v: f64) -> PatchPoint {
     eval_tensor(cp, &Basis::at(u), &Basis::at(v))
 }
 
+/// [`eval`]'s position and first derivatives alone, bit for bit (the same products summed in
+/// the same order), for 44 multiply-adds instead of 72 and no second-derivative basis.
+#[inline]
+pub fn eval_d1(cp: &ControlGrid, u: f64, v: f64) -> PointD1 {
+    let (wu, du) = (basis(u), basis_d1(u));
+    let (wv, dv) = (basis(v), basis_d1(v));
+    let mut out = PointD1::default();
+    for j in 0..4 {
+        let mut r = [0.0; 3];
+        let mut ru = [0.0; 3];
+        for i in 0..4 {
+            let p = &cp[4 * j + i];
+            axpy(&mut r, wu[i], p);
+            axpy(&mut ru, du[i], p);
+        }
+        axpy(&mut out.p, wv[j], &r);
+        axpy(&mut out.dv, dv[j], &r);
+        axpy(&mut out.du, wv[j], &ru);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

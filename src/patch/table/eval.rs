@@ -17,6 +17,60 @@ impl PatchTable {
         if let Some(surface) = &self.loop_surface {
             return surface.eval_sub_quad(at);
         }
+        self.check(at)?;
+        if let Some(q) = &self.quad_approx {
+            return q.eval(at);
+        }
+        let (patch, frame, s, t) = self.leaf(at)?;
+        let (pt, local, extra) = self.eval_patch(patch, s, t);
+        let pt = match local {
+            Some(l) => frame.then(&l).face_point(pt),
+            None => frame.face_point(pt),
+        };
+        Ok(Sample {
+            p: pt.p,
+            du: pt.du,
+            dv: pt.dv,
+            duu: pt.duu,
+            duv: pt.duv,
+            dvv: pt.dvv,
+            level: patch.level + extra,
+        })
+    }
+
+    /// [`Self::eval`]'s position and first derivatives, the same bits, without the second
+    /// derivatives' work where the leaf is a B-spline patch (what dicing needs).
+    pub fn eval_d1(&self, at: FaceCoord) -> Result<PointD1> {
+        let d1 = |s: &Sample| PointD1 {
+            p: s.p,
+            du: s.du,
+            dv: s.dv,
+        };
+        if self.approx.is_some() || self.loop_surface.is_some() {
+            return self.eval(at).map(|s| d1(&s));
+        }
+        self.check(at)?;
+        if self.quad_approx.is_some() {
+            return self.eval(at).map(|s| d1(&s));
+        }
+        let (patch, frame, s, t) = self.leaf(at)?;
+        if let PatchKind::BSpline { .. } = patch.kind {
+            return Ok(frame.face_point_d1(bspline::eval_d1(self.grid(patch.first_point), s, t)));
+        }
+        let (pt, local, _) = self.eval_patch(patch, s, t);
+        let frame = match local {
+            Some(l) => frame.then(&l),
+            None => frame,
+        };
+        Ok(frame.face_point_d1(PointD1 {
+            p: pt.p,
+            du: pt.du,
+            dv: pt.dv,
+        }))
+    }
+
+    /// An error when `at` is outside the table's domains.
+    fn check(&self, at: FaceCoord) -> Result<()> {
         let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
         if face >= self.num_faces() {
             return Err(Error::new(
@@ -39,12 +93,16 @@ impl PatchTable {
                 format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
             ));
         }
-        if let Some(q) = &self.quad_approx {
-            return q.eval(at);
-        }
+        Ok(())
+    }
+
+    /// The leaf of the quadtree holding `at` (in range), its frame and `at` in the leaf's
+    /// `(s, t)`; an error in a hole.
+    fn leaf(&self, at: FaceCoord) -> Result<(&Patch, Frame, f64, f64)> {
+        let (face, k) = (at.face as usize, at.k as usize);
         let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
         let mut frame = Frame::UNIT;
-        let (mut s, mut t) = (u, v);
+        let (mut s, mut t) = (at.u, at.v);
         loop {
             match node {
                 Node::Empty => {
@@ -60,23 +118,7 @@ impl PatchTable {
                     t = t2;
                     node = self.kids[c as usize][q];
                 }
-                Node::Leaf(p) => {
-                    let patch = &self.patches[p as usize];
-                    let (pt, local, extra) = self.eval_patch(patch, s, t);
-                    let pt = match local {
-                        Some(l) => frame.then(&l).face_point(pt),
-                        None => frame.face_point(pt),
-                    };
-                    return Ok(Sample {
-                        p: pt.p,
-                        du: pt.du,
-                        dv: pt.dv,
-                        duu: pt.duu,
-                        duv: pt.duv,
-                        dvv: pt.dvv,
-                        level: patch.level + extra,
-                    });
-                }
+                Node::Leaf(p) => return Ok((&self.patches[p as usize], frame, s, t)),
             }
         }
     }

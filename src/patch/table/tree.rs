@@ -1,7 +1,7 @@
 //! The quadtree of a patch table: nodes (inner, leaf, empty), the frame of each node within its
 //! (sub-)face, and the descent from a node to the child holding a point.
 
-use crate::patch::bspline::PatchPoint;
+use crate::patch::bspline::{PatchPoint, PointD1};
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Node {
@@ -77,13 +77,29 @@ impl Frame {
                     / h4
             })
         };
-        PatchPoint {
+        let d1 = self.face_point_d1(PointD1 {
             p: pt.p,
-            du: std::array::from_fn(|i| (pt.du[i] * a[0] + pt.dv[i] * b[0]) / h2),
-            dv: std::array::from_fn(|i| (pt.du[i] * a[1] + pt.dv[i] * b[1]) / h2),
+            du: pt.du,
+            dv: pt.dv,
+        });
+        PatchPoint {
+            p: d1.p,
+            du: d1.du,
+            dv: d1.dv,
             duu: d2(0, 0),
             duv: d2(0, 1),
             dvv: d2(1, 1),
+        }
+    }
+
+    /// [`Self::face_point`] for the position and first derivatives alone (the same bits).
+    pub(crate) fn face_point_d1(&self, pt: PointD1) -> PointD1 {
+        let (a, b) = (self.a, self.b);
+        let h2 = a[0] * a[0] + a[1] * a[1];
+        PointD1 {
+            p: pt.p,
+            du: std::array::from_fn(|i| (pt.du[i] * a[0] + pt.dv[i] * b[0]) / h2),
+            dv: std::array::from_fn(|i| (pt.du[i] * a[1] + pt.dv[i] * b[1]) / h2),
         }
     }
 }
