@@ -150,39 +150,17 @@ impl PatchTable {
         if let Some(surface) = &self.loop_surface {
             return surface.level_sub_quad(at);
         }
-        let (face, k) = (at.face as usize, at.k as usize);
-        if self.loop_surface.is_none()
-            && face < self.num_faces()
-            && k < self.sub_faces(face)
-            && (0.0..=1.0).contains(&at.u)
-            && (0.0..=1.0).contains(&at.v)
-        {
-            let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
-            let (mut s, mut t) = (at.u, at.v);
-            loop {
-                match node {
-                    Node::Inner(c) => {
-                        let (q, s2, t2) = descend(s, t);
-                        s = s2;
-                        t = t2;
-                        node = self.kids[c as usize][q];
-                    }
-                    Node::Leaf(p) => {
-                        let patch = &self.patches[p as usize];
-                        match patch.kind {
-                            PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. } => {
-                                return Ok(patch.level);
-                            }
-                            // How deep Stam's evaluation goes depends on (s, t) alone.
-                            PatchKind::Stam { corner, .. } => {
-                                let (_, s1, t1) = stam_corner(corner, s, t);
-                                return Ok(patch.level + stam::depth(s1, t1));
-                            }
-                            PatchKind::EndCap => break,
-                        }
-                    }
-                    Node::Empty => break,
+        if let Ok((patch, _, s, t)) = self.check(at).and_then(|_| self.leaf(at)) {
+            match patch.kind {
+                PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. } => {
+                    return Ok(patch.level);
                 }
+                // How deep Stam's evaluation goes depends on (s, t) alone.
+                PatchKind::Stam { corner, .. } => {
+                    let (_, s1, t1) = stam_corner(corner, s, t);
+                    return Ok(patch.level + stam::depth(s1, t1));
+                }
+                PatchKind::EndCap => {}
             }
         }
         Ok(self.eval(at)?.level)
