@@ -99,7 +99,12 @@ impl StencilTable {
 
     /// Appends a row given as `(input, weight)` terms (taken as they are).
     pub fn push_terms(&mut self, terms: &[(u32, f64)]) {
-        for &(i, w) in terms {
+        self.push_iter(terms.iter().copied());
+    }
+
+    /// Appends one stencil from its terms `(input, weight)`, as [`Self::push_terms`].
+    pub fn push_iter(&mut self, terms: impl IntoIterator<Item = (u32, f64)>) {
+        for (i, w) in terms {
             self.indices.push(i);
             self.weights.push(w);
         }

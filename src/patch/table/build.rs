@@ -70,11 +70,6 @@ impl PatchTable {
         patch.origin = fr.o;
         patch.axis_u = fr.a;
         patch.axis_v = fr.b;
-        *self
-            .stats
-            .by_kind_level
-            .entry((kind_name(patch.kind).to_string(), patch.level))
-            .or_default() += 1;
         self.patches.push(patch);
         self.nodes[slot as usize] = Node::Leaf((self.patches.len() - 1) as u32);
     }
@@ -147,8 +142,8 @@ impl PatchTable {
         if let Some((kind, cps)) = found {
             let first = self.point_stencils.len() as u32;
             for c in &cps {
-                let terms: Vec<(u32, f64)> = c.iter().map(|&(v, w)| (offset + v, w)).collect();
-                self.point_stencils.push_terms(&terms);
+                self.point_stencils
+                    .push_iter(c.iter().map(|&(v, w)| (offset + v, w)));
             }
             self.add_leaf(
                 slot,
@@ -415,6 +410,15 @@ impl PatchTable {
             pending = next;
         }
         table.point_stencils.num_inputs = total as usize;
+        // Patches per kind and level, counted once here (not a string key per leaf).
+        let mut counts = std::collections::BTreeMap::<(&str, u8), usize>::new();
+        for p in &table.patches {
+            *counts.entry((kind_name(p.kind), p.level)).or_default() += 1;
+        }
+        table.stats.by_kind_level = counts
+            .into_iter()
+            .map(|((kind, level), n)| ((kind.to_string(), level), n))
+            .collect();
         table.kids = table
             .children
             .iter()
