@@ -1,22 +1,23 @@
 #!/usr/bin/env bash
 # Side-by-side benchmark against Embree 4.4 (issues 5 and 14): limitray's grid core, its
 # triangle BVH, Embree on the same triangles, Embree subdivision geometry at the same rate (and
-# Embree's robust triangles, and limitray's reference intersector), for
-# catmark_car at rates 4 and 16, the generated 316 x 316 grid (99,856 faces) at rate 4 and the
-# 79 x 79 grid at rate 16 (the same 3.2 M triangles: the 316 grid at rate 16 would be 51 M
-# triangles, about 25 GB for the four engines at the ~500 bytes per triangle measured, more
-# than the 23 GB machine), 1 and 2 threads. Prints a markdown table on stdout; the JSON lines
-# of `limitray bench` go to stderr.
+# Embree's robust triangles, and limitray's reference intersector). By default, issue 14's four
+# meshes: catmark_car at rates 16 and 64, scenes/meshes/blob.obj at rate 16 and the generated
+# 316 x 316 grid (99,856 faces) at rate 4, 1 and 2 threads; about 12 minutes with RAYS=300000
+# REPS=3 on 2 cores. The engines together take ~500 bytes per triangle: about 6.5 GB for the car
+# at rate 64 (12.9 M triangles); the 316 grid at rate 16 (51 M triangles, about 25 GB) does not
+# fit a 23 GB machine, so use 79:16 for 3.2 M triangles at rate 16.
+# Prints a markdown table on stdout; the JSON lines of `limitray bench` go to stderr.
 #
 # Usage: bash scripts/setup-embree.sh && bash scripts/bench-embree.sh > table.md 2> raw.jsonl
 # Environment: RAYS (default 1000000), REPS (3), THREADS ("1 2"),
-#              CONFIGS ("car:4 car:16 316:4 79:16": mesh (car, blob or grid size) and rate).
+#              CONFIGS ("car:16 blob:16 car:64 316:4": mesh (car, blob or grid size) and rate).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 RAYS="${RAYS:-1000000}"
 REPS="${REPS:-3}"
-CONFIGS="${CONFIGS:-car:4 car:16 316:4 79:16}"
+CONFIGS="${CONFIGS:-car:16 blob:16 car:64 316:4}"
 THREADS="${THREADS:-1 2}"
 CAR="$ROOT/../shared/models/opensubdiv/catmark_car.obj"
 bash scripts/setup-embree.sh
