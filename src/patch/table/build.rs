@@ -471,3 +471,32 @@ impl PatchTable {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::patch::{PatchOptions, PatchTable};
+
+    /// The statistics count patches by kind and level: a 6 × 6 grid is 16 interior, 16
+    /// boundary and 4 corner B-spline patches at level 0; on a mesh with extraordinary
+    /// vertices the counts add up to the patches, with deeper levels present.
+    #[test]
+    fn patch_counts_by_kind_and_level() {
+        let table =
+            PatchTable::new(&crate::mesh::generate::grid(6), PatchOptions::default()).unwrap();
+        let got: Vec<(&str, u8, usize)> = table
+            .stats
+            .by_kind_level
+            .iter()
+            .map(|((k, l), &n)| (k.as_str(), *l, n))
+            .collect();
+        assert_eq!(
+            got,
+            [("boundary", 0, 16), ("corner", 0, 4), ("regular", 0, 16)]
+        );
+        let table =
+            PatchTable::new(&crate::mesh::shapes::gear(7), PatchOptions::default()).unwrap();
+        let total: usize = table.stats.by_kind_level.values().sum();
+        assert_eq!(total, table.patches.len());
+        assert!(table.stats.by_kind_level.keys().any(|(_, l)| *l > 0));
+    }
+}

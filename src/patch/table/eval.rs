@@ -312,22 +312,35 @@ mod tests {
     use crate::harness::rng::SplitMix64;
     use crate::patch::{PatchOptions, PatchTable};
 
+    /// Tables with B-spline, single-crease, Stam and end-cap leaves (extraordinary vertices,
+    /// semi-sharp creases, n-gons).
+    fn tables() -> Vec<PatchTable> {
+        [
+            crate::mesh::shapes::rounded_box(2.0),
+            crate::mesh::shapes::gear(7),
+            crate::mesh::shapes::blob(),
+            crate::mesh::generate::grid(6),
+        ]
+        .iter()
+        .map(|mesh| PatchTable::new(mesh, PatchOptions::default()).unwrap())
+        .collect()
+    }
+
+    /// A random domain `(face, k)` of `table`.
+    fn random_domain(rng: &mut SplitMix64, table: &PatchTable) -> (usize, usize) {
+        let f = rng.below(table.num_faces());
+        (f, rng.below(table.sub_faces(f)))
+    }
+
     /// `level_at` is `eval(..).level`, on meshes with B-spline, single-crease, Stam and
     /// end-cap leaves (extraordinary vertices, semi-sharp creases, n-gons).
     #[test]
     fn level_at_is_the_evaluated_level() {
         let mut rng = SplitMix64(8);
         let mut whole = 0;
-        for mesh in [
-            crate::mesh::shapes::rounded_box(2.0),
-            crate::mesh::shapes::gear(7),
-            crate::mesh::shapes::blob(),
-            crate::mesh::generate::grid(6),
-        ] {
-            let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        for table in tables() {
             for _ in 0..4000 {
-                let f = rng.below(table.num_faces());
-                let k = rng.below(table.sub_faces(f));
+                let (f, k) = random_domain(&mut rng, &table);
                 let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
                 let want = table.eval(at).map(|s| s.level).ok();
                 assert_eq!(table.level_at(at).ok(), want, "{at:?}");
@@ -347,16 +360,9 @@ mod tests {
     fn eval_d1_is_eval_bit_for_bit() {
         let bits = |p: [[f64; 3]; 3]| p.map(|v| v.map(f64::to_bits));
         let mut rng = SplitMix64(21);
-        for mesh in [
-            crate::mesh::shapes::rounded_box(2.0),
-            crate::mesh::shapes::gear(7),
-            crate::mesh::shapes::blob(),
-            crate::mesh::generate::grid(6),
-        ] {
-            let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        for table in tables() {
             for i in 0..4000 {
-                let f = rng.below(table.num_faces());
-                let k = rng.below(table.sub_faces(f));
+                let (f, k) = random_domain(&mut rng, &table);
                 let (u, v) = if i % 2 == 0 {
                     (rng.next_f64(), rng.next_f64())
                 } else {
