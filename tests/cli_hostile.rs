@@ -213,6 +213,36 @@ fn render_checks_outputs_first_and_never_replaces_devices() {
     );
     let o = run(&["render", &s, "-o", "-", "--png", "-", "--quiet"], b"");
     refused(&o, "only one output can be standard output");
+    let o = run(&["render", &s, "-o", "x.png", "--quiet"], b"");
+    refused(
+        &o,
+        "x.png: this output is written as EXR, but its extension .png",
+    );
+    let o = run(
+        &["render", &s, "-o", "x.exr", "--png", "p.EXR", "--quiet"],
+        b"",
+    );
+    refused(
+        &o,
+        "p.EXR: this output is written as PNG, but its extension .exr",
+    );
+    let o = run(
+        &[
+            "render",
+            &s,
+            "-o",
+            "x.exr",
+            "--levels-png",
+            "l.jpg",
+            "--quiet",
+        ],
+        b"",
+    );
+    refused(
+        &o,
+        "l.jpg: this output is written as PNG, but its extension .jpg",
+    );
+    assert!(!Path::new("x.png").exists() && !Path::new("x.exr").exists());
     let o = run(
         &["render", &s, "-o", "x.exr", "--spp", "2000000", "--quiet"],
         b"",

@@ -131,6 +131,10 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
             "only one output can be standard output ('-')",
         ));
     }
+    format_matches(&args.output, "EXR", &["exr"])?;
+    for p in args.png.iter().chain(args.levels_png.iter()) {
+        format_matches(p, "PNG", &["png"])?;
+    }
     let mut exr_out = Output::create(&args.output)?;
     let mut png_out = args.png.as_deref().map(Output::create).transpose()?;
     let mut levels_out = args.levels_png.as_deref().map(Output::create).transpose()?;
@@ -281,6 +285,31 @@ fn render_in_pool(args: &RenderArgs) -> Result<RenderReport> {
 }
 
 /// Runs `limitray render`, discarding the report.
+/// Extensions of image formats a user may type by mistake; an output named with one of them
+/// (other than its own) is refused before any work, since the file would hold another format.
+const IMAGE_EXTENSIONS: &[&str] = &[
+    "exr", "png", "jpg", "jpeg", "tif", "tiff", "hdr", "bmp", "tga", "ppm", "pfm", "webp", "gif",
+];
+
+/// Refuses `path` when its extension names an image format other than `allowed` (no
+/// extension, standard output and unknown extensions are accepted).
+fn format_matches(path: &std::path::Path, format: &str, allowed: &[&str]) -> Result<()> {
+    let Some(ext) = path.extension().and_then(|e| e.to_str()) else {
+        return Ok(());
+    };
+    let ext = ext.to_ascii_lowercase();
+    if IMAGE_EXTENSIONS.contains(&ext.as_str()) && !allowed.contains(&ext.as_str()) {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!(
+                "{}: this output is written as {format}, but its extension .{ext} names another format",
+                path.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 pub fn run_cmd(args: &RenderArgs) -> Result<()> {
     run(args).map(|_| ())
 }

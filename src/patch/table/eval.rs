@@ -224,17 +224,7 @@ impl PatchTable {
         }
         bspline::eval_lattice(self.grid(patch.first_point), nu, nv, |pt| {
             // The root's frame, as `eval` applies it (the identity up to the sign of zeros).
-            let f = Frame::UNIT.face_point(PatchPoint {
-                p: pt.p,
-                du: pt.du,
-                dv: pt.dv,
-                ..PatchPoint::default()
-            });
-            out(PointD1 {
-                p: f.p,
-                du: f.du,
-                dv: f.dv,
-            })
+            out(Frame::UNIT.face_point_d1(pt))
         });
         true
     }
