@@ -35,7 +35,7 @@ use crate::refine::crease;
 use crate::refine::Level;
 use crate::vec3::{cross, norm, sub};
 use rayon::prelude::*;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Options of [`dice`].
 #[derive(Clone, Debug, PartialEq)]
@@ -101,6 +101,9 @@ pub struct GridRegion {
     pub k: u32,
     /// Where the grid lies in the domain.
     pub part: GridPart,
+    /// The level of all the domain's triangles when the domain is one patch
+    /// ([`PatchTable::domain_level`]); `None` when [`TriInfo::level`] varies.
+    pub level: Option<u8>,
 }
 
 impl DicedMesh {
@@ -487,7 +490,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     let sizes: Vec<DomainSize> = domains
         .par_chunks(64)
         .flat_map_iter(|chunk| {
-            let mut cache = HashMap::new();
+            let mut cache = HashMap::default();
             chunk
                 .iter()
                 .map(|&(f, k)| ctx.domain_size(f as usize, k as usize, &mut cache))
@@ -529,6 +532,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
                     face: f,
                     k,
                     part: g,
+                    level: table.domain_level(f as usize, k as usize),
                 });
             }
             let slices = DomainSlices {
@@ -546,7 +550,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     }
     jobs.into_par_iter()
         .with_min_len(64)
-        .try_for_each_init(HashMap::new, |cache, (f, k, slices)| {
+        .try_for_each_init(HashMap::default, |cache, (f, k, slices)| {
             ctx.domain(f as usize, k as usize, cache, slices)
         })?;
     Ok(out)
@@ -786,16 +790,13 @@ impl DomainCtx<'_> {
         // A domain that is one patch has one level (no lookup per triangle).
         let whole = self.table.domain_level(f, k);
         for (ti, t) in pat.triangles.iter().enumerate() {
-            let uv = t.map(|i| pat.uv(i as usize));
-            let (cu, cv) = (
-                (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
-                (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
-            );
             let level = match whole {
                 Some(l) => l,
-                None => self
-                    .table
-                    .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?,
+                None => {
+                    let [cu, cv] = pat.tri_centre[ti];
+                    self.table
+                        .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?
+                }
             };
             out.triangles[ti] = t.map(|i| {
                 let v = map[i as usize];
@@ -809,7 +810,7 @@ impl DomainCtx<'_> {
                 face: f as u32,
                 k: k as u32,
                 level,
-                uv: uv.map(|p| [p[0] as f32, p[1] as f32]),
+                uv: pat.tri_uv[ti],
             };
         }
         Ok(())

@@ -23,6 +23,10 @@ pub struct Pattern {
     pub triangles: Vec<[u32; 3]>,
     /// Where the grid quads lie (`None` if the pattern has none).
     pub grid: Option<GridPart>,
+    /// Per triangle: its corners' `(u, v)` rounded to `f32` (what a diced triangle records).
+    pub tri_uv: Vec<[[f32; 2]; 3]>,
+    /// Per triangle: its centroid `(u, v)` (where a triangle's level is looked up), in `f64`.
+    pub tri_centre: Vec<[f64; 2]>,
 }
 
 impl Pattern {
@@ -94,6 +98,8 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
         interior: Vec::new(),
         triangles: Vec::new(),
         grid: None,
+        tri_uv: Vec::new(),
+        tri_centre: Vec::new(),
     };
     let matched = [
         rates[0] == nu,
@@ -176,6 +182,14 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
         left.reverse();
         let tris = zip(&p, 1, &right, &left);
         p.triangles.extend(tris);
+    }
+    for t in &p.triangles {
+        let uv = t.map(|i| p.uv(i as usize));
+        p.tri_centre.push([
+            (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
+            (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
+        ]);
+        p.tri_uv.push(uv.map(|q| [q[0] as f32, q[1] as f32]));
     }
     p
 }

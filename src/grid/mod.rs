@@ -227,7 +227,7 @@ struct BlockSlices<'a> {
 }
 
 /// Stores block `p` of `d` into `out`; returns its root node.
-fn fill_block(d: &DicedMesh, p: &Planned, out: BlockSlices) -> Box4 {
+fn fill_block(d: &DicedMesh, codes: &[u32], p: &Planned, out: BlockSlices) -> Box4 {
     let g = &d.grids[p.region as usize];
     let h = &p.header;
     let (cols, rows) = (h.cols as usize, h.rows as usize);
@@ -239,7 +239,7 @@ fn fill_block(d: &DicedMesh, p: &Planned, out: BlockSlices) -> Box4 {
             for a in 0..3 {
                 out.coords[(3 * y + a) * (cols + 1) + x] = q[a];
             }
-            out.normals[y * (cols + 1) + x] = oct_encode(d.normals[v]);
+            out.normals[y * (cols + 1) + x] = codes[v];
         }
     }
     let coords = &*out.coords;
@@ -247,10 +247,17 @@ fn fill_block(d: &DicedMesh, p: &Planned, out: BlockSlices) -> Box4 {
         std::array::from_fn(|a| coords[(3 * y + a) * (cols + 1) + x])
     });
     out.boxes.copy_from_slice(&boxes[1..]);
-    for y in 0..rows {
-        for x in 0..cols {
-            for k in 0..2 {
-                out.levels[2 * (y * cols + x) + k] = d.tri_info[h.triangle(x, y, k) as usize].level;
+    match g.level {
+        // One patch: one level (the triangles' records are not read).
+        Some(l) => out.levels.fill(l),
+        None => {
+            for y in 0..rows {
+                for x in 0..cols {
+                    for k in 0..2 {
+                        out.levels[2 * (y * cols + x) + k] =
+                            d.tri_info[h.triangle(x, y, k) as usize].level;
+                    }
+                }
             }
         }
     }
@@ -271,6 +278,14 @@ impl GridMesh {
             .filter(|(_, g)| g.part.quads[0] > 0 && g.part.quads[1] > 0)
             .map(|(i, g)| plan_region(d, i, g))
             .flatten_iter()
+            .collect();
+        // Each vertex's octahedral normal, encoded once (a block border's vertices are held by
+        // two or four blocks, a loose triangle's corners by several triangles).
+        let codes: Vec<u32> = d
+            .normals
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&n| oct_encode(n))
             .collect();
         let mut covered = vec![false; d.triangles.len()];
         for g in &d.grids {
@@ -312,7 +327,7 @@ impl GridMesh {
             }
             loose.push(Loose {
                 p,
-                n: t.map(|v| oct_encode(d.normals[v as usize])),
+                n: t.map(|v| codes[v as usize]),
                 uv: info.uv,
                 id: i as u32,
                 face: info.face,
@@ -428,7 +443,7 @@ impl GridMesh {
         }
         jobs.into_par_iter()
             .with_min_len(16)
-            .for_each(|(h, plan, out)| h.root = fill_block(d, plan, out));
+            .for_each(|(h, plan, out)| h.root = fill_block(d, &codes, plan, out));
         m.top = top;
         Ok(m)
     }

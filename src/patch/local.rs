@@ -12,7 +12,7 @@
 
 use crate::mesh::{CreaseMethod, Topology};
 use crate::refine::Level;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// A level (usually a small neighbourhood) and `width` numbers of data per vertex.
 #[derive(Clone, Debug)]
@@ -82,7 +82,7 @@ impl LocalMesh {
 pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<u32>, Vec<u32>) {
     let topo = &level.topo;
     let mut faces: Vec<u32> = Vec::new();
-    let mut seen: HashMap<u32, u32> = HashMap::new();
+    let mut seen: HashMap<u32, u32> = HashMap::default();
     let mut seed_new = Vec::with_capacity(seeds.len());
     for &f in seeds {
         let id = *seen.entry(f).or_insert_with(|| {
@@ -107,9 +107,9 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
         }
         frontier = next;
     }
-    let mut vmap: HashMap<u32, u32> = HashMap::new();
+    let mut vmap: HashMap<u32, u32> = HashMap::default();
     let mut verts_old = Vec::new();
-    let mut emap: HashMap<u32, u32> = HashMap::new();
+    let mut emap: HashMap<u32, u32> = HashMap::default();
     let mut edges_old = Vec::new();
     let mut offsets = vec![0u32];
     let mut fverts = Vec::new();
