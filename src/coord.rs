@@ -11,7 +11,7 @@
 /// let at = FaceCoord::quad(3, 0.25, 0.5);
 /// assert_eq!((at.face, at.k, at.u, at.v), (3, 0, 0.25, 0.5));
 /// ```
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 pub struct FaceCoord {
     /// Base (control-mesh) face, 0-based.
     pub face: u32,

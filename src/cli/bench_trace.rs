@@ -2,7 +2,7 @@
 //! second.
 
 use super::args::{MeshSource, RuleArgs, SurfaceArg, ThreadArgs};
-use crate::dice::{dice, DiceOptions, DiceRate};
+use crate::dice::{dice, dice_lean, DiceOptions, DiceRate};
 use crate::error::Result;
 use crate::grid::GridMesh;
 use crate::harness::rays::{camera_rays, random_rays};
@@ -88,7 +88,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             },
         )?;
         let t1 = std::time::Instant::now();
-        let d = dice(
+        let d = dice_lean(
             &table,
             &mesh,
             &DiceOptions {
@@ -98,8 +98,8 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             },
         )?;
         let t2 = std::time::Instant::now();
-        let tris = d.triangles.len();
-        let bvh = GridMesh::build(&d)?;
+        let tris = d.triangles().len();
+        let bvh = GridMesh::build_lean(&d)?;
         drop(d);
         let t3 = std::time::Instant::now();
         let bounds = bvh.bounds();

@@ -37,6 +37,32 @@ pub fn dice_mesh(
     options: crate::mesh::Options,
     args: &DiceArgs,
 ) -> Result<(PatchTable, DicedMesh)> {
+    let table = table_for(mesh, options, args)?;
+    let d = dice(&table, mesh, &args.options())?;
+    Ok((table, d))
+}
+
+/// Builds the patch table, dices `mesh` under `options` for the grid core alone
+/// ([`crate::dice::dice_lean`]) and builds its grid mesh; returns it with the number of
+/// triangles.
+pub fn dice_grid(
+    mesh: &ControlMesh,
+    options: crate::mesh::Options,
+    args: &DiceArgs,
+) -> Result<(crate::grid::GridMesh, usize)> {
+    let table = table_for(mesh, options, args)?;
+    let d = crate::dice::dice_lean(&table, mesh, &args.options())?;
+    drop(table);
+    Ok((crate::grid::GridMesh::build_lean(&d)?, d.triangles().len()))
+}
+
+/// The patch table of `mesh` under `options`, with a warning when the rate is above the
+/// maximum rate.
+fn table_for(
+    mesh: &ControlMesh,
+    options: crate::mesh::Options,
+    args: &DiceArgs,
+) -> Result<PatchTable> {
     let table = PatchTable::with_options(mesh, options, args.patch_options())?;
     if args.edge_length.is_none() && args.rate > args.max_rate.max(1) {
         eprintln!(
@@ -46,8 +72,7 @@ pub fn dice_mesh(
             args.max_rate.max(1)
         );
     }
-    let d = dice(&table, mesh, &args.options())?;
-    Ok((table, d))
+    Ok(table)
 }
 
 /// Writes a diced mesh as OBJ: `v`, `vn`, `vt` (the vertex's `(u, v)` in its face, at the f32

@@ -1,11 +1,10 @@
 //! `limitray gpu-info` and `limitray bench-gpu` (feature `gpu`).
 
 use super::args::{DiceArgs, MeshSource};
-use super::dice::dice_mesh;
+use super::dice::dice_grid;
 use crate::bvh::Ray;
 use crate::error::{Error, ErrorKind, Result};
 use crate::gpu::{GpuContext, GpuTracer, PackedScene, TraceOptions};
-use crate::grid::GridMesh;
 use crate::harness::rays::{camera_rays, random_rays};
 
 /// `limitray gpu-info`: the Vulkan adapters, one per line, the automatic choice first.
@@ -58,10 +57,7 @@ pub fn bench_gpu(args: &BenchGpuArgs) -> Result<serde_json::Value> {
         rate: args.rate,
         ..DiceArgs::default()
     };
-    let (_, d) = dice_mesh(&mesh, mesh.options, &dargs)?;
-    let tris = d.triangles.len();
-    let bvh = GridMesh::build(&d)?;
-    drop(d);
+    let (bvh, tris) = dice_grid(&mesh, mesh.options, &dargs)?;
     let ctx = GpuContext::new(args.adapter.as_deref())?;
     let tracer = GpuTracer::new(&ctx, PackedScene::from_mesh(&bvh)?, TraceOptions::default())?;
     let threads = args.threads.max(1);

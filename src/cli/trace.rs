@@ -3,7 +3,7 @@
 //! the reference intersector's certified first hit on the exact limit surface, in `f64`.
 
 use super::args::{load, DiceArgs, RuleArgs};
-use super::dice::dice_mesh;
+use super::dice::dice_grid;
 use crate::bvh::{Ray, Ray64};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
@@ -108,9 +108,7 @@ pub fn run(args: &TraceCmd) -> Result<()> {
     }
     let options = args.rules.options(&m);
     let scheme = options.scheme;
-    let (_table, d) = dice_mesh(&m, options, &args.dice)?;
-    let bvh = GridMesh::build(&d)?;
-    drop(d);
+    let (bvh, _) = dice_grid(&m, options, &args.dice)?;
     match args.backend.backend {
         Backend::Cpu => trace_with(input, output, |rays| {
             let f32_rays: Vec<Ray> = rays.iter().map(|r| r.0).collect();

@@ -59,7 +59,7 @@ impl Default for DiceOptions {
 }
 
 /// Per-triangle attributes.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 pub struct TriInfo {
     /// Base face.
     pub face: u32,
@@ -368,6 +368,40 @@ pub fn estimate_size(
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
 /// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
+    dice_with(table, mesh, opts, false)
+}
+
+/// A diced surface for the grid core alone ([`crate::grid::GridMesh::build_lean`]): what
+/// [`dice`] gives, less what the grid does not read (the points' [`DicedMesh::params`], and
+/// the records of the triangles in the grids of domains that are one patch), so that dicing
+/// writes, and pages in, less memory. The points and triangles are [`dice`]'s, bit for bit.
+#[derive(Debug)]
+pub struct LeanDiced(pub(crate) DicedMesh);
+
+impl LeanDiced {
+    /// The points, as [`DicedMesh::positions`].
+    pub fn positions(&self) -> &[[f32; 3]] {
+        &self.0.positions
+    }
+
+    /// The triangles, as [`DicedMesh::triangles`].
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.0.triangles
+    }
+}
+
+/// Dices as [`dice`] does, for [`crate::grid::GridMesh::build_lean`] ([`LeanDiced`]).
+pub fn dice_lean(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<LeanDiced> {
+    dice_with(table, mesh, opts, true).map(LeanDiced)
+}
+
+/// [`dice`]; with `lean`, without the parameters and records [`LeanDiced`] leaves out.
+fn dice_with(
+    table: &PatchTable,
+    mesh: &ControlMesh,
+    opts: &DiceOptions,
+    lean: bool,
+) -> Result<DicedMesh> {
     let (level, _) = Level::base(mesh, &table.mesh_options)?;
     if table.num_faces() != level.num_faces() {
         return Err(Error::new(
@@ -484,6 +518,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
         sharp_edge: &sharp_edge,
         sharp_vertex: &sharp_vertex,
         displace: displacer.as_ref(),
+        lean,
     };
     // Sizes first (patterns only, nothing evaluated), so that every domain then writes its
     // points and triangles in place, in parallel, with no per-domain buffers to copy.
@@ -508,21 +543,29 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
     let mut out = DicedMesh {
         positions: vec![[0.0; 3]; total_points],
         normals: vec![[0.0; 3]; total_points],
-        params: vec![FaceCoord::default(); total_points],
+        // Zeroed allocations (every page is first touched by the domain that writes it, in
+        // parallel; `vec![x; n]` of a struct writes every element here, sequentially).
+        params: if lean {
+            Vec::new()
+        } else {
+            bytemuck::zeroed_vec(total_points)
+        },
         triangles: vec![[0; 3]; total_tris],
-        tri_info: vec![TriInfo::default(); total_tris],
+        tri_info: bytemuck::zeroed_vec(total_tris),
         grids: Vec::new(),
     };
     for (i, q) in shared.points.iter().enumerate() {
         out.positions[i] = q.p;
         out.normals[i] = q.n;
-        out.params[i] = q.param;
+        if let Some(slot) = out.params.get_mut(i) {
+            *slot = q.param;
+        }
     }
     let mut jobs = Vec::with_capacity(domains.len());
     {
         let n = shared.points.len();
         let (mut positions, mut normals) = (&mut out.positions[n..], &mut out.normals[n..]);
-        let mut params = &mut out.params[n..];
+        let mut params = out.params.get_mut(n..).unwrap_or_default();
         let (mut triangles, mut tri_info) = (&mut out.triangles[..], &mut out.tri_info[..]);
         let (mut base, mut first_triangle) = (n as u32, 0u32);
         for (&(f, k), z) in domains.iter().zip(&sizes) {
@@ -539,7 +582,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
                 base,
                 positions: split_off(&mut positions, z.points),
                 normals: split_off(&mut normals, z.points),
-                params: split_off(&mut params, z.points),
+                params: split_off(&mut params, if lean { 0 } else { z.points }),
                 triangles: split_off(&mut triangles, z.triangles),
                 tri_info: split_off(&mut tri_info, z.triangles),
             };
@@ -588,11 +631,13 @@ struct DomainSlices<'a> {
 }
 
 impl DomainSlices<'_> {
-    /// Stores the domain's point `i`.
+    /// Stores the domain's point `i` (its parameters too, unless dicing is lean).
     fn put(&mut self, i: usize, q: Point) {
         self.positions[i] = q.p;
         self.normals[i] = q.n;
-        self.params[i] = q.param;
+        if let Some(slot) = self.params.get_mut(i) {
+            *slot = q.param;
+        }
     }
 }
 
@@ -604,6 +649,8 @@ struct DomainCtx<'a> {
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
     displace: Option<&'a DisplacedSurface<'a>>,
+    /// Dicing for [`LeanDiced`]: no records of one-patch domains' grid triangles.
+    lean: bool,
 }
 
 /// A point on a domain's side: its shared index, and whether it lies on a seam.
@@ -789,6 +836,12 @@ impl DomainCtx<'_> {
         }
         // A domain that is one patch has one level (no lookup per triangle).
         let whole = self.table.domain_level(f, k);
+        // Lean dicing leaves out the records of such a domain's grid triangles (the grid
+        // region carries its level).
+        let unrecorded = match (self.lean, whole, pat.grid) {
+            (true, Some(_), Some(g)) => 2 * (g.quads[0] * g.quads[1]) as usize,
+            _ => 0,
+        };
         for (ti, t) in pat.triangles.iter().enumerate() {
             let level = match whole {
                 Some(l) => l,
@@ -806,6 +859,9 @@ impl DomainCtx<'_> {
                     v
                 }
             });
+            if ti < unrecorded {
+                continue;
+            }
             out.tri_info[ti] = TriInfo {
                 face: f as u32,
                 k: k as u32,

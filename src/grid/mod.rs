@@ -27,7 +27,7 @@ pub mod window;
 use crate::bvh::mesh::Corners;
 use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
-use crate::dice::{DicedMesh, GridRegion};
+use crate::dice::{DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK};
 use node::{front_to_back, test4, Box4};
@@ -55,7 +55,7 @@ pub struct Loose {
 }
 
 /// A diced limit surface as grid blocks and loose triangles under a top-level BVH.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct GridMesh {
     /// Block headers.
     pub blocks: Vec<Block>,
@@ -269,6 +269,19 @@ impl GridMesh {
     /// are stored in the order of the top level's leaves. Fails when the mesh needs more than
     /// 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
     pub fn build(d: &DicedMesh) -> Result<GridMesh> {
+        Self::build_from(d)
+    }
+
+    /// [`Self::build`] from a lean dicing ([`crate::dice::dice_lean`]): the same grid mesh,
+    /// from less memory.
+    pub fn build_lean(d: &LeanDiced) -> Result<GridMesh> {
+        Self::build_from(&d.0)
+    }
+
+    /// [`Self::build`], reading of `d` only what a [`LeanDiced`] holds: positions, normals,
+    /// triangles, grid regions, the records of loose triangles, and the records of grid
+    /// triangles in regions without a [`GridRegion::level`].
+    fn build_from(d: &DicedMesh) -> Result<GridMesh> {
         // Plan the blocks (headers and bounds) first; their data is stored once, in place, after
         // the top level has fixed their order.
         let plans: Vec<Planned> = d
@@ -417,7 +430,9 @@ impl GridMesh {
         // four values at a time: the last plane's last row reads past it into four zeros.
         m.coords = vec![0.0; ncoords + 4];
         m.normals = vec![0; ncoords / 3];
-        m.boxes = vec![Box4::default(); nboxes];
+        // Zeroed, not empty boxes: every block overwrites all of its slice (and a zeroed
+        // allocation's pages are first touched by the block that writes them, in parallel).
+        m.boxes = bytemuck::zeroed_vec(nboxes);
         m.levels = vec![0; nlevels];
         let mut jobs = Vec::with_capacity(nblocks);
         let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);

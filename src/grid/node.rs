@@ -9,7 +9,7 @@ pub use crate::bvh::mesh::WideBoxes as Box8;
 
 /// Four axis-aligned boxes, structure of arrays; an absent child is the empty box
 /// (`lo = +∞`, `hi = −∞`), which no ray meets.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 pub struct Box4 {
     /// Lower corners: `lo[axis][child]`.

@@ -44,7 +44,7 @@ impl Node8 {
 }
 
 /// The top level.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Top {
     /// Nodes (the root first, when the root is a node).
     pub nodes: Vec<Node8>,

@@ -9,7 +9,7 @@ use super::material::Material;
 use super::scene::{Dicing, EnvDesc, MeshDesc, RenderSettings, SceneDesc};
 use super::texturing::{InstanceMaps, MaterialTextures};
 use crate::bvh::SceneBvh;
-use crate::dice::{dice, DiceOptions, DiceRate, ScreenRate};
+use crate::dice::{dice_lean, DiceOptions, DiceRate, ScreenRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridMesh;
 use crate::mesh::obj::read_obj;
@@ -371,7 +371,7 @@ impl World {
             .par_iter()
             .map(|&i| {
                 let m = &desc.meshes[i];
-                dice(&tables[table_of[i]], &controls[file_of[i]], &options[i])
+                dice_lean(&tables[table_of[i]], &controls[file_of[i]], &options[i])
                     .map_err(|e| e.in_file(m.file.display().to_string()))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -385,16 +385,16 @@ impl World {
             if emitted(desc.materials[m.material].1).is_some() && light_tris[job].is_none() {
                 let d = &diced[job];
                 light_tris[job] = Some(
-                    d.triangles
+                    d.triangles()
                         .iter()
-                        .map(|t| t.map(|i| d.positions[i as usize]))
+                        .map(|t| t.map(|i| d.positions()[i as usize]))
                         .collect(),
                 );
             }
         }
         let job_grids: Vec<Arc<GridMesh>> = diced
             .into_par_iter()
-            .map(|d| GridMesh::build(&d).map(Arc::new))
+            .map(|d| GridMesh::build_lean(&d).map(Arc::new))
             .collect::<Result<Vec<_>>>()?;
         let grids: Vec<Arc<GridMesh>> = job_of.iter().map(|&j| job_grids[j].clone()).collect();
         let mut scene = SceneBvh::new();
