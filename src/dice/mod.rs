@@ -368,40 +368,48 @@ pub fn estimate_size(
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
 /// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
-    dice_with(table, mesh, opts, false)
+    dice_with(table, mesh, opts, false).map(|(d, _)| d)
 }
 
 /// A diced surface for the grid core alone ([`crate::grid::GridMesh::build_lean`]): what
 /// [`dice`] gives, less what the grid does not read (the points' [`DicedMesh::params`], and
-/// the records of the triangles in the grids of domains that are one patch), so that dicing
-/// writes, and pages in, less memory. The points and triangles are [`dice`]'s, bit for bit.
+/// of the triangles in grid regions no record but their level, none at all where the domain
+/// is one patch), so that dicing writes, and pages in, less memory. The points and triangles
+/// are [`dice`]'s, bit for bit.
 #[derive(Debug)]
-pub struct LeanDiced(pub(crate) DicedMesh);
+pub struct LeanDiced {
+    /// The diced mesh, its grid triangles without records.
+    pub(crate) mesh: DicedMesh,
+    /// Per triangle, the level of the grid triangles of regions without a
+    /// [`GridRegion::level`] (others are 0).
+    pub(crate) levels: Vec<u8>,
+}
 
 impl LeanDiced {
     /// The points, as [`DicedMesh::positions`].
     pub fn positions(&self) -> &[[f32; 3]] {
-        &self.0.positions
+        &self.mesh.positions
     }
 
     /// The triangles, as [`DicedMesh::triangles`].
     pub fn triangles(&self) -> &[[u32; 3]] {
-        &self.0.triangles
+        &self.mesh.triangles
     }
 }
 
 /// Dices as [`dice`] does, for [`crate::grid::GridMesh::build_lean`] ([`LeanDiced`]).
 pub fn dice_lean(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<LeanDiced> {
-    dice_with(table, mesh, opts, true).map(LeanDiced)
+    dice_with(table, mesh, opts, true).map(|(mesh, levels)| LeanDiced { mesh, levels })
 }
 
-/// [`dice`]; with `lean`, without the parameters and records [`LeanDiced`] leaves out.
+/// [`dice`]; with `lean`, without the parameters and records [`LeanDiced`] leaves out, and
+/// with its grid triangles' levels apart (empty otherwise).
 fn dice_with(
     table: &PatchTable,
     mesh: &ControlMesh,
     opts: &DiceOptions,
     lean: bool,
-) -> Result<DicedMesh> {
+) -> Result<(DicedMesh, Vec<u8>)> {
     let (level, _) = Level::base(mesh, &table.mesh_options)?;
     if table.num_faces() != level.num_faces() {
         return Err(Error::new(
@@ -554,6 +562,7 @@ fn dice_with(
         tri_info: bytemuck::zeroed_vec(total_tris),
         grids: Vec::new(),
     };
+    let mut levels = vec![0u8; if lean { total_tris } else { 0 }];
     for (i, q) in shared.points.iter().enumerate() {
         out.positions[i] = q.p;
         out.normals[i] = q.n;
@@ -567,6 +576,7 @@ fn dice_with(
         let (mut positions, mut normals) = (&mut out.positions[n..], &mut out.normals[n..]);
         let mut params = out.params.get_mut(n..).unwrap_or_default();
         let (mut triangles, mut tri_info) = (&mut out.triangles[..], &mut out.tri_info[..]);
+        let mut tri_levels = &mut levels[..];
         let (mut base, mut first_triangle) = (n as u32, 0u32);
         for (&(f, k), z) in domains.iter().zip(&sizes) {
             if let Some(g) = z.grid {
@@ -585,6 +595,7 @@ fn dice_with(
                 params: split_off(&mut params, if lean { 0 } else { z.points }),
                 triangles: split_off(&mut triangles, z.triangles),
                 tri_info: split_off(&mut tri_info, z.triangles),
+                levels: split_off(&mut tri_levels, if lean { z.triangles } else { 0 }),
             };
             base += z.points as u32;
             first_triangle += z.triangles as u32;
@@ -596,7 +607,7 @@ fn dice_with(
         .try_for_each_init(HashMap::default, |cache, (f, k, slices)| {
             ctx.domain(f as usize, k as usize, cache, slices)
         })?;
-    Ok(out)
+    Ok((out, levels))
 }
 
 /// The first `n` items of `rest`, which keeps the others.
@@ -628,6 +639,8 @@ struct DomainSlices<'a> {
     params: &'a mut [FaceCoord],
     triangles: &'a mut [[u32; 3]],
     tri_info: &'a mut [TriInfo],
+    /// Lean dicing: the levels of its grid triangles (empty otherwise).
+    levels: &'a mut [u8],
 }
 
 impl DomainSlices<'_> {
@@ -836,21 +849,13 @@ impl DomainCtx<'_> {
         }
         // A domain that is one patch has one level (no lookup per triangle).
         let whole = self.table.domain_level(f, k);
-        // Lean dicing leaves out the records of such a domain's grid triangles (the grid
-        // region carries its level).
-        let unrecorded = match (self.lean, whole, pat.grid) {
-            (true, Some(_), Some(g)) => 2 * (g.quads[0] * g.quads[1]) as usize,
+        // Lean dicing records of its grid triangles only the level, apart, and not even that
+        // where the domain is one patch (its grid region carries the level).
+        let unrecorded = match (self.lean, pat.grid) {
+            (true, Some(g)) => 2 * (g.quads[0] * g.quads[1]) as usize,
             _ => 0,
         };
         for (ti, t) in pat.triangles.iter().enumerate() {
-            let level = match whole {
-                Some(l) => l,
-                None => {
-                    let [cu, cv] = pat.tri_centre[ti];
-                    self.table
-                        .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?
-                }
-            };
             out.triangles[ti] = t.map(|i| {
                 let v = map[i as usize];
                 if v & LOCAL != 0 {
@@ -859,7 +864,19 @@ impl DomainCtx<'_> {
                     v
                 }
             });
+            if ti < unrecorded && whole.is_some() {
+                continue;
+            }
+            let level = match whole {
+                Some(l) => l,
+                None => {
+                    let [cu, cv] = pat.tri_centre[ti];
+                    self.table
+                        .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?
+                }
+            };
             if ti < unrecorded {
+                out.levels[ti] = level;
                 continue;
             }
             out.tri_info[ti] = TriInfo {

@@ -227,7 +227,13 @@ struct BlockSlices<'a> {
 }
 
 /// Stores block `p` of `d` into `out`; returns its root node.
-fn fill_block(d: &DicedMesh, codes: &[u32], p: &Planned, out: BlockSlices) -> Box4 {
+fn fill_block(
+    d: &DicedMesh,
+    levels: Option<&[u8]>,
+    codes: &[u32],
+    p: &Planned,
+    out: BlockSlices,
+) -> Box4 {
     let g = &d.grids[p.region as usize];
     let h = &p.header;
     let (cols, rows) = (h.cols as usize, h.rows as usize);
@@ -254,8 +260,11 @@ fn fill_block(d: &DicedMesh, codes: &[u32], p: &Planned, out: BlockSlices) -> Bo
             for y in 0..rows {
                 for x in 0..cols {
                     for k in 0..2 {
-                        out.levels[2 * (y * cols + x) + k] =
-                            d.tri_info[h.triangle(x, y, k) as usize].level;
+                        let t = h.triangle(x, y, k) as usize;
+                        out.levels[2 * (y * cols + x) + k] = match levels {
+                            Some(l) => l[t],
+                            None => d.tri_info[t].level,
+                        };
                     }
                 }
             }
@@ -269,19 +278,20 @@ impl GridMesh {
     /// are stored in the order of the top level's leaves. Fails when the mesh needs more than
     /// 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
     pub fn build(d: &DicedMesh) -> Result<GridMesh> {
-        Self::build_from(d)
+        Self::build_from(d, None)
     }
 
     /// [`Self::build`] from a lean dicing ([`crate::dice::dice_lean`]): the same grid mesh,
     /// from less memory.
     pub fn build_lean(d: &LeanDiced) -> Result<GridMesh> {
-        Self::build_from(&d.0)
+        Self::build_from(&d.mesh, Some(&d.levels))
     }
 
     /// [`Self::build`], reading of `d` only what a [`LeanDiced`] holds: positions, normals,
-    /// triangles, grid regions, the records of loose triangles, and the records of grid
-    /// triangles in regions without a [`GridRegion::level`].
-    fn build_from(d: &DicedMesh) -> Result<GridMesh> {
+    /// triangles, grid regions and the records of loose triangles; the levels of grid
+    /// triangles in regions without a [`GridRegion::level`] from `tri_levels` when given (a lean
+    /// dicing's), else from their records.
+    fn build_from(d: &DicedMesh, tri_levels: Option<&[u8]>) -> Result<GridMesh> {
         // Plan the blocks (headers and bounds) first; their data is stored once, in place, after
         // the top level has fixed their order.
         let plans: Vec<Planned> = d
@@ -458,7 +468,7 @@ impl GridMesh {
         }
         jobs.into_par_iter()
             .with_min_len(16)
-            .for_each(|(h, plan, out)| h.root = fill_block(d, &codes, plan, out));
+            .for_each(|(h, plan, out)| h.root = fill_block(d, tri_levels, &codes, plan, out));
         m.top = top;
         Ok(m)
     }
