@@ -24,7 +24,9 @@ pub struct Block {
     /// Offset of the quadrants' [`Box4`] nodes (four, of their windows) when the block has
     /// more than 4×4 quads.
     pub boxes: u32,
-    /// Offset of the per-triangle levels (two per quad, row by row).
+    /// Offset of the per-triangle levels (two per quad, row by row) in
+    /// [`super::GridMesh::levels`]; or, with [`LEVEL_UNIFORM`] set, the one level of all its
+    /// triangles in the low byte (a block of a domain that is one patch stores no levels).
     pub level: u32,
     /// Diced-mesh id of the first quad's first triangle.
     pub tri0: u32,
@@ -44,7 +46,29 @@ pub struct Block {
     pub rows: u8,
 }
 
+/// Flag of [`Block::level`]: every triangle of the block has the level in its low byte.
+pub const LEVEL_UNIFORM: u32 = 1 << 31;
+
 impl Block {
+    /// The level of half `h` of quad `(x, y)`, from the block's uniform level or `levels`
+    /// (the grid mesh's per-triangle levels).
+    pub fn triangle_level(&self, levels: &[u8], x: usize, y: usize, h: usize) -> u8 {
+        if self.level & LEVEL_UNIFORM != 0 {
+            self.level as u8
+        } else {
+            levels[self.level as usize + 2 * (y * self.cols as usize + x) + h]
+        }
+    }
+
+    /// Number of per-triangle levels the block stores.
+    pub fn num_levels(&self) -> usize {
+        if self.level & LEVEL_UNIFORM != 0 {
+            0
+        } else {
+            2 * self.cols as usize * self.rows as usize
+        }
+    }
+
     /// Number of vertices.
     pub fn num_vertices(&self) -> usize {
         (self.cols as usize + 1) * (self.rows as usize + 1)

@@ -29,7 +29,7 @@ use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
-use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK};
+use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{front_to_back, test4, Box4};
 use rayon::prelude::*;
 use top::Top;
@@ -194,6 +194,8 @@ fn plan_region(d: &DicedMesh, region: usize, g: &GridRegion) -> Vec<Planned> {
                 n: g.part.n,
                 cols: cols as u8,
                 rows: rows as u8,
+                // A one-patch domain's level, once for the block.
+                level: g.level.map_or(0, |l| LEVEL_UNIFORM | l as u32),
                 ..Block::default()
             };
             let mut bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
@@ -254,8 +256,8 @@ fn fill_block(
     });
     out.boxes.copy_from_slice(&boxes[1..]);
     match g.level {
-        // One patch: one level (the triangles' records are not read).
-        Some(l) => out.levels.fill(l),
+        // One patch: one level, in the header (the triangles' records are not read).
+        Some(_) => debug_assert!(out.levels.is_empty()),
         None => {
             for y in 0..rows {
                 for x in 0..cols {
@@ -407,10 +409,12 @@ impl GridMesh {
                 let mut h = plans[prim].header;
                 h.vert = ncoords as u32;
                 h.boxes = nboxes as u32;
-                h.level = nlevels as u32;
+                if h.level & LEVEL_UNIFORM == 0 {
+                    h.level = nlevels as u32;
+                }
                 ncoords += 3 * h.num_vertices();
                 nboxes += h.num_boxes();
-                nlevels += 2 * h.cols as usize * h.rows as usize;
+                nlevels += h.num_levels();
                 new_id[prim] = m.blocks.len() as u32;
                 m.quadrants
                     .push(if h.two_level() { h.boxes } else { u32::MAX });
@@ -455,7 +459,7 @@ impl GridMesh {
             normals = rest;
             let (b, rest) = std::mem::take(&mut boxes).split_at_mut(h.num_boxes());
             boxes = rest;
-            let nl = 2 * h.cols as usize * h.rows as usize;
+            let nl = h.num_levels();
             let (l, rest) = std::mem::take(&mut levels).split_at_mut(nl);
             levels = rest;
             let out = BlockSlices {
@@ -760,7 +764,7 @@ impl GridMesh {
                 let b = &self.blocks[bi as usize];
                 let (x, y, h) = (x as usize, y as usize, h as usize);
                 let uv = grid_corners(x, y, h).map(|(cx, cy)| b.uv(cx, cy));
-                let level = self.levels[b.level as usize + 2 * (y * b.cols as usize + x) + h];
+                let level = b.triangle_level(&self.levels, x, y, h);
                 let id = b.triangle(x, y, h);
                 let n = self.corner_normals(leaf);
                 (self.corners(leaf), n, uv, id, b.face, b.k, level)
