@@ -129,6 +129,7 @@ fn one_triangle() -> limitray::dice::DicedMesh {
             uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
         }],
         grids: Vec::new(),
+        grid_frames: Vec::new(),
     }
 }
 

@@ -98,7 +98,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             },
         )?;
         let t2 = std::time::Instant::now();
-        let tris = d.triangles().len();
+        let tris = d.num_triangles();
         let bvh = GridMesh::build_lean(&d)?;
         drop(d);
         let t3 = std::time::Instant::now();

@@ -53,7 +53,7 @@ pub fn dice_grid(
     let table = table_for(mesh, options, args)?;
     let d = crate::dice::dice_lean(&table, mesh, &args.options())?;
     drop(table);
-    Ok((crate::grid::GridMesh::build_lean(&d)?, d.triangles().len()))
+    Ok((crate::grid::GridMesh::build_lean(&d)?, d.num_triangles()))
 }
 
 /// The patch table of `mesh` under `options`, with a warning when the rate is above the

@@ -86,6 +86,8 @@ pub struct DicedMesh {
     pub tri_info: Vec<TriInfo>,
     /// The regular grids among the triangles, one per domain that has one.
     pub grids: Vec<GridRegion>,
+    /// The vertices of the grids' frames ([`GridRegion::frame`]).
+    pub grid_frames: Vec<u32>,
 }
 
 /// A domain's regular grid of quads in a [`DicedMesh`]: `quads[0] × quads[1]` quads, row by
@@ -104,6 +106,35 @@ pub struct GridRegion {
     /// The level of all the domain's triangles when the domain is one patch
     /// ([`PatchTable::domain_level`]); `None` when [`TriInfo::level`] varies.
     pub level: Option<u8>,
+    /// Offset of the grid's frame in [`DicedMesh::grid_frames`]: the vertices of its first row,
+    /// last row (each `quads[0] + 1`, left to right), first column and last column (each
+    /// `quads[1] + 1`, bottom to top).
+    pub frame: u32,
+    /// The vertex of the domain's grid point `(1, 1)`: grid point `(i, j)` inside the frame is
+    /// vertex `interior + (j − 1)(nu − 1) + (i − 1)`.
+    pub interior: u32,
+}
+
+impl GridRegion {
+    /// The vertex at point `(x, y)` of the grid (`x ≤ quads[0]`, `y ≤ quads[1]`), from the
+    /// frame in `frames` ([`DicedMesh::grid_frames`]) or the interior.
+    pub fn vertex(&self, frames: &[u32], x: u32, y: u32) -> u32 {
+        let [qc, qr] = self.part.quads;
+        let f = self.frame as usize;
+        let (w, h) = (qc as usize + 1, qr as usize + 1);
+        if y == 0 {
+            frames[f + x as usize]
+        } else if y == qr {
+            frames[f + w + x as usize]
+        } else if x == 0 {
+            frames[f + 2 * w + y as usize]
+        } else if x == qc {
+            frames[f + 2 * w + h + y as usize]
+        } else {
+            let (i, j) = (self.part.origin[0] + x, self.part.origin[1] + y);
+            self.interior + (j - 1) * (self.part.n[0] - 1) + (i - 1)
+        }
+    }
 }
 
 impl DicedMesh {
@@ -115,6 +146,7 @@ impl DicedMesh {
             + self.triangles.len() * 12
             + self.tri_info.len() * std::mem::size_of::<TriInfo>()
             + self.grids.len() * std::mem::size_of::<GridRegion>()
+            + self.grid_frames.len() * 4
     }
 
     /// Axis-aligned bounds of the vertices (`[max, min]` inverted when empty).
@@ -372,10 +404,10 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
 }
 
 /// A diced surface for the grid core alone ([`crate::grid::GridMesh::build_lean`]): what
-/// [`dice`] gives, less what the grid does not read (the points' [`DicedMesh::params`], and
-/// of the triangles in grid regions no record but their level, none at all where the domain
-/// is one patch), so that dicing writes, and pages in, less memory. The points and triangles
-/// are [`dice`]'s, bit for bit.
+/// [`dice`] gives, less what the grid does not read (the points' [`DicedMesh::params`]; of
+/// the triangles in grid regions, their corners, implicit in the grid, and their records but
+/// the level, none at all where the domain is one patch), so that dicing writes, and pages in,
+/// less memory. The points and triangles are [`dice`]'s, bit for bit.
 #[derive(Debug)]
 pub struct LeanDiced {
     /// The diced mesh, its grid triangles without records.
@@ -391,9 +423,31 @@ impl LeanDiced {
         &self.mesh.positions
     }
 
-    /// The triangles, as [`DicedMesh::triangles`].
-    pub fn triangles(&self) -> &[[u32; 3]] {
-        &self.mesh.triangles
+    /// Number of triangles.
+    pub fn num_triangles(&self) -> usize {
+        self.mesh.triangles.len()
+    }
+
+    /// The triangles, as [`DicedMesh::triangles`] (those of the grids from the grid regions:
+    /// quad `(x, y)` as `[a, b, c]` and `[a, c, d]` from its lower-left corner `a`,
+    /// counter-clockwise).
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        let d = &self.mesh;
+        let mut out = d.triangles.clone();
+        for g in &d.grids {
+            let [qc, qr] = g.part.quads;
+            let mut t = g.first_triangle as usize;
+            for y in 0..qr {
+                for x in 0..qc {
+                    let v = |dx: u32, dy: u32| g.vertex(&d.grid_frames, x + dx, y + dy);
+                    let (a, b, c, e) = (v(0, 0), v(1, 0), v(1, 1), v(0, 1));
+                    out[t] = [a, b, c];
+                    out[t + 1] = [a, c, e];
+                    t += 2;
+                }
+            }
+        }
+        out
     }
 }
 
@@ -561,6 +615,7 @@ fn dice_with(
         triangles: vec![[0; 3]; total_tris],
         tri_info: bytemuck::zeroed_vec(total_tris),
         grids: Vec::new(),
+        grid_frames: vec![0; sizes.iter().map(|z| z.frame).sum()],
     };
     let mut levels = vec![0u8; if lean { total_tris } else { 0 }];
     for (i, q) in shared.points.iter().enumerate() {
@@ -577,7 +632,8 @@ fn dice_with(
         let mut params = out.params.get_mut(n..).unwrap_or_default();
         let (mut triangles, mut tri_info) = (&mut out.triangles[..], &mut out.tri_info[..]);
         let mut tri_levels = &mut levels[..];
-        let (mut base, mut first_triangle) = (n as u32, 0u32);
+        let mut frames = &mut out.grid_frames[..];
+        let (mut base, mut first_triangle, mut first_frame) = (n as u32, 0u32, 0u32);
         for (&(f, k), z) in domains.iter().zip(&sizes) {
             if let Some(g) = z.grid {
                 out.grids.push(GridRegion {
@@ -586,6 +642,8 @@ fn dice_with(
                     k,
                     part: g,
                     level: table.domain_level(f as usize, k as usize),
+                    frame: first_frame,
+                    interior: base + z.copies as u32,
                 });
             }
             let slices = DomainSlices {
@@ -596,9 +654,11 @@ fn dice_with(
                 triangles: split_off(&mut triangles, z.triangles),
                 tri_info: split_off(&mut tri_info, z.triangles),
                 levels: split_off(&mut tri_levels, if lean { z.triangles } else { 0 }),
+                frame: split_off(&mut frames, z.frame),
             };
             base += z.points as u32;
             first_triangle += z.triangles as u32;
+            first_frame += z.frame as u32;
             jobs.push((f, k, slices));
         }
     }
@@ -628,6 +688,10 @@ struct DomainSize {
     triangles: usize,
     /// Its regular grid, if any.
     grid: Option<GridPart>,
+    /// Seam copies among its points (they come first).
+    copies: usize,
+    /// Points of its grid's frame.
+    frame: usize,
 }
 
 /// Where a domain stores its points and triangles in the diced mesh.
@@ -641,6 +705,8 @@ struct DomainSlices<'a> {
     tri_info: &'a mut [TriInfo],
     /// Lean dicing: the levels of its grid triangles (empty otherwise).
     levels: &'a mut [u8],
+    /// Its grid's frame ([`GridRegion::frame`]).
+    frame: &'a mut [u32],
 }
 
 impl DomainSlices<'_> {
@@ -806,6 +872,8 @@ impl DomainCtx<'_> {
             points: copies + pat.interior.len(),
             triangles: pat.triangles.len(),
             grid: pat.grid,
+            copies,
+            frame: pat.grid_frame.len(),
         }
     }
 
@@ -841,6 +909,17 @@ impl DomainCtx<'_> {
         }
         let first = own;
         map.extend((0..pat.interior.len()).map(|i| LOCAL | (first + i) as u32));
+        let base = out.base;
+        let global = move |v: u32| {
+            if v & LOCAL != 0 {
+                base + (v & !LOCAL)
+            } else {
+                v
+            }
+        };
+        for (slot, &i) in out.frame.iter_mut().zip(&pat.grid_frame) {
+            *slot = global(map[i as usize]);
+        }
         if !self.lattice(f, k, pat, |i, q| out.put(first + i, q))? {
             for (i, &[u, v]) in pat.interior.iter().enumerate() {
                 let q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
@@ -849,22 +928,17 @@ impl DomainCtx<'_> {
         }
         // A domain that is one patch has one level (no lookup per triangle).
         let whole = self.table.domain_level(f, k);
-        // Lean dicing records of its grid triangles only the level, apart, and not even that
-        // where the domain is one patch (its grid region carries the level).
+        // Lean dicing writes of its grid triangles neither corners (the grid build reads the
+        // frame) nor records, only the level, apart, and not even that where the domain is one
+        // patch (its grid region carries the level).
         let unrecorded = match (self.lean, pat.grid) {
             (true, Some(g)) => 2 * (g.quads[0] * g.quads[1]) as usize,
             _ => 0,
         };
         for (ti, t) in pat.triangles.iter().enumerate() {
-            out.triangles[ti] = t.map(|i| {
-                let v = map[i as usize];
-                if v & LOCAL != 0 {
-                    out.base + (v & !LOCAL)
-                } else {
-                    v
-                }
-            });
-            if ti < unrecorded && whole.is_some() {
+            if ti >= unrecorded {
+                out.triangles[ti] = t.map(|i| global(map[i as usize]));
+            } else if whole.is_some() {
                 continue;
             }
             let level = match whole {

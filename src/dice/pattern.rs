@@ -27,6 +27,12 @@ pub struct Pattern {
     pub tri_uv: Vec<[[f32; 2]; 3]>,
     /// Per triangle: its centroid `(u, v)` (where a triangle's level is looked up), in `f64`.
     pub tri_centre: Vec<[f64; 2]>,
+    /// The points of the grid's frame, as point indices (ring or interior): its first row,
+    /// its last row (each `quads[0] + 1` points, left to right), its first column and its last
+    /// column (each `quads[1] + 1` points, bottom to top); empty without a grid. The points
+    /// inside the frame are interior points, `(i, j)` being interior point
+    /// `(j − 1)(nu − 1) + (i − 1)`.
+    pub grid_frame: Vec<u32>,
 }
 
 impl Pattern {
@@ -100,6 +106,7 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
         grid: None,
         tri_uv: Vec::new(),
         tri_centre: Vec::new(),
+        grid_frame: Vec::new(),
     };
     let matched = [
         rates[0] == nu,
@@ -154,6 +161,11 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
                 origin: [c0, r0],
                 quads: [c1 - c0, r1 - r0],
             });
+            let mut frame: Vec<u32> = (c0..=c1).map(|i| point(&p, i, r0)).collect();
+            frame.extend((c0..=c1).map(|i| point(&p, i, r1)));
+            frame.extend((r0..=r1).map(|j| point(&p, c0, j)));
+            frame.extend((r0..=r1).map(|j| point(&p, c1, j)));
+            p.grid_frame = frame;
         }
         // The grid's outer rows and columns, running the same way as the sides.
         let inner: [Vec<u32>; 4] = [

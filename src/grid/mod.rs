@@ -165,18 +165,10 @@ fn runs(n: usize) -> Vec<(usize, usize)> {
     out
 }
 
-/// The diced-mesh vertex at grid vertex `(x, y)` of region `g`, read from its triangles.
+/// The diced-mesh vertex at grid vertex `(x, y)` of region `g` (its frame or its interior;
+/// the triangles are not read).
 fn region_vertex(d: &DicedMesh, g: &GridRegion, x: usize, y: usize) -> usize {
-    let [qc, qr] = g.part.quads.map(|x| x as usize);
-    let (qx, qy) = (x.min(qc - 1), y.min(qr - 1));
-    let t = g.first_triangle as usize + 2 * (qy * qc + qx);
-    let (t0, t1) = (d.triangles[t], d.triangles[t + 1]);
-    (match (x > qx, y > qy) {
-        (false, false) => t0[0],
-        (true, false) => t0[1],
-        (true, true) => t0[2],
-        (false, true) => t1[2],
-    }) as usize
+    g.vertex(&d.grid_frames, x as u32, y as u32) as usize
 }
 
 /// The blocks of region `region` (`g`): headers and bounds, nothing stored yet.

@@ -386,7 +386,7 @@ impl World {
                 let d = &diced[job];
                 light_tris[job] = Some(
                     d.triangles()
-                        .iter()
+                        .into_iter()
                         .map(|t| t.map(|i| d.positions()[i as usize]))
                         .collect(),
                 );
