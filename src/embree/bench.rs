@@ -15,7 +15,7 @@ use super::subdiv::{check_rate, subdivision_scene_noise};
 use super::triangles::triangle_scene;
 use super::{Device, Scene, SceneOptions};
 use crate::bvh::{MeshBvh, Ray, Ray64};
-use crate::dice::{dice, DiceOptions, DiceRate, Displacement};
+use crate::dice::{dice, dice_lean, DiceOptions, DiceRate, Displacement};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::ExactTracer;
 use crate::grid::GridMesh;
@@ -482,11 +482,12 @@ fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
 }
 
 /// limitray's two diced structures, and the seconds of each build part per repetition:
-/// patch table, dicing, grid core, triangle BVH.
+/// patch table, lean dicing, grid core (the grid core's build), full dicing, triangle BVH
+/// (the triangle BVH's).
 struct Limitray {
     grid: GridMesh,
     tris: MeshBvh,
-    parts: [Vec<f64>; 4],
+    parts: [Vec<f64>; 5],
 }
 
 fn build_limitray(
@@ -495,33 +496,34 @@ fn build_limitray(
     reps: usize,
     displace: Option<(f64, f64)>,
 ) -> Result<Limitray> {
-    let mut parts: [Vec<f64>; 4] = Default::default();
+    let mut parts: [Vec<f64>; 5] = Default::default();
     let mut last: Option<(GridMesh, MeshBvh)> = None;
+    let options = DiceOptions {
+        rate: DiceRate::Uniform(rate),
+        displace: displace.map(|(amplitude, frequency)| Displacement::Noise {
+            amplitude,
+            frequency,
+        }),
+        ..DiceOptions::default()
+    };
     for _ in 0..reps.max(1) {
         // Free the previous repetition first: peak memory stays at one copy.
         drop(last.take());
         let t0 = Instant::now();
         let table = embree_table(mesh)?;
         let t1 = Instant::now();
-        let diced = dice(
-            &table,
-            mesh,
-            &DiceOptions {
-                rate: DiceRate::Uniform(rate),
-                displace: displace.map(|(amplitude, frequency)| Displacement::Noise {
-                    amplitude,
-                    frequency,
-                }),
-                ..DiceOptions::default()
-            },
-        )?;
-        drop(table);
+        let lean = dice_lean(&table, mesh, &options)?;
         let t2 = Instant::now();
-        let grid = GridMesh::build(&diced)?;
+        let grid = GridMesh::build_lean(&lean)?;
+        drop(lean);
         let t3 = Instant::now();
-        let tris = MeshBvh::build(diced);
+        // The triangle BVH needs the full diced mesh (every triangle's record).
+        let diced = dice(&table, mesh, &options)?;
+        drop(table);
         let t4 = Instant::now();
-        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4)]
+        let tris = MeshBvh::build(diced);
+        let t5 = Instant::now();
+        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
             .into_iter()
             .enumerate()
         {
@@ -654,10 +656,10 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
     let p = &lr.parts;
     let med = |i: usize| median(p[i].clone());
-    let total = |last: usize| {
+    let total = |dice: usize, last: usize| {
         median(
             (0..p[0].len())
-                .map(|r| p[0][r] + p[1][r] + p[last][r])
+                .map(|r| p[0][r] + p[dice][r] + p[last][r])
                 .collect(),
         )
     };
@@ -665,7 +667,7 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         measure(
             "limitray",
             &lr.grid,
-            total(2),
+            total(1, 2),
             vec![("patch_table", med(0)), ("dice", med(1)), ("grid", med(2))],
             Some(lr.grid.bytes()),
             &leak_rays,
@@ -673,8 +675,8 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         measure(
             "limitray-triangles",
             &lr.tris,
-            total(3),
-            vec![("patch_table", med(0)), ("dice", med(1)), ("bvh", med(3))],
+            total(3, 4),
+            vec![("patch_table", med(0)), ("dice", med(3)), ("bvh", med(4))],
             Some(lr.tris.bytes() - lr.tris.diced.bytes()),
             &leak_rays,
         ),
