@@ -410,7 +410,7 @@ pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Resul
 /// less memory. The points and triangles are [`dice`]'s, bit for bit.
 #[derive(Debug)]
 pub struct LeanDiced {
-    /// The diced mesh, its grid triangles without records.
+    /// The diced mesh, without parameters, and its grid triangles without corners or records.
     pub(crate) mesh: DicedMesh,
     /// Per triangle, the level of the grid triangles of regions without a
     /// [`GridRegion::level`] (others are 0).
@@ -728,7 +728,8 @@ struct DomainCtx<'a> {
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
     displace: Option<&'a DisplacedSurface<'a>>,
-    /// Dicing for [`LeanDiced`]: no records of one-patch domains' grid triangles.
+    /// Dicing for [`LeanDiced`]: no per-point parameters, and of grid triangles neither
+    /// corners nor records (only their levels, apart, where the domain has several).
     lean: bool,
 }
 

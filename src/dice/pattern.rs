@@ -161,11 +161,6 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
                 origin: [c0, r0],
                 quads: [c1 - c0, r1 - r0],
             });
-            let mut frame: Vec<u32> = (c0..=c1).map(|i| point(&p, i, r0)).collect();
-            frame.extend((c0..=c1).map(|i| point(&p, i, r1)));
-            frame.extend((r0..=r1).map(|j| point(&p, c0, j)));
-            frame.extend((r0..=r1).map(|j| point(&p, c1, j)));
-            p.grid_frame = frame;
         }
         // The grid's outer rows and columns, running the same way as the sides.
         let inner: [Vec<u32>; 4] = [
@@ -174,6 +169,13 @@ pub fn pattern(rates: [u32; 4]) -> Pattern {
             (c0..=c1).rev().map(|i| point(&p, i, r1)).collect(),
             (r0..=r1).rev().map(|j| point(&p, c0, j)).collect(),
         ];
+        if p.grid.is_some() {
+            // First row, last row (left to right), first column, last column (bottom to top).
+            p.grid_frame = inner[0].clone();
+            p.grid_frame.extend(inner[2].iter().rev());
+            p.grid_frame.extend(inner[3].iter().rev());
+            p.grid_frame.extend(&inner[1]);
+        }
         for (s, inner_side) in inner.into_iter().enumerate() {
             if !matched[s] {
                 let outer = side(&p, s);

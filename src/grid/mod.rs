@@ -282,9 +282,9 @@ impl GridMesh {
     }
 
     /// [`Self::build`], reading of `d` only what a [`LeanDiced`] holds: positions, normals,
-    /// triangles, grid regions and the records of loose triangles; the levels of grid
-    /// triangles in regions without a [`GridRegion::level`] from `tri_levels` when given (a lean
-    /// dicing's), else from their records.
+    /// grid regions and their frames, and the corners and records of loose triangles; the
+    /// levels of grid triangles in regions without a [`GridRegion::level`] from `tri_levels`
+    /// when given (a lean dicing's), else from their records.
     fn build_from(d: &DicedMesh, tri_levels: Option<&[u8]>) -> Result<GridMesh> {
         // Plan the blocks (headers and bounds) first; their data is stored once, in place, after
         // the top level has fixed their order.
@@ -304,11 +304,6 @@ impl GridMesh {
             .with_min_len(4096)
             .map(|&n| oct_encode(n))
             .collect();
-        let mut covered = vec![false; d.triangles.len()];
-        for g in &d.grids {
-            let n = 2 * (g.part.quads[0] * g.part.quads[1]) as usize;
-            covered[g.first_triangle as usize..g.first_triangle as usize + n].fill(true);
-        }
         let mut m = GridMesh {
             triangles: d.triangles.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
@@ -319,10 +314,19 @@ impl GridMesh {
         // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
         // domain's zipper triangles are consecutive, side by side).
         let mut strips: Vec<[u32; 2]> = Vec::new();
-        for (i, t) in d.triangles.iter().enumerate() {
-            if covered[i] {
-                continue;
-            }
+        // The loose triangles: those between the grid regions (which are in id order).
+        let grid_runs = d.grids.iter().map(|g| {
+            let first = g.first_triangle as usize;
+            first..first + 2 * (g.part.quads[0] * g.part.quads[1]) as usize
+        });
+        let gaps = grid_runs
+            .clone()
+            .map(|r| r.start)
+            .chain([d.triangles.len()])
+            .zip(std::iter::once(0).chain(grid_runs.map(|r| r.end)))
+            .flat_map(|(end, start)| start..end);
+        for i in gaps {
+            let t = &d.triangles[i];
             let info = &d.tri_info[i];
             let p = t.map(|v| d.positions[v as usize]);
             let same = loose.last().is_some_and(|l: &Loose| {
