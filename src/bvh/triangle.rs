@@ -38,7 +38,10 @@ pub struct PreparedRay {
 }
 
 impl PreparedRay {
-    /// Prepares `ray`; `None` if its direction is zero or not finite.
+    /// Prepares `ray`; `None` if its direction is zero or not finite. Inlined: the
+    /// traversals copy the prepared ray out of a returned value with wide loads that would
+    /// stall on the narrow stores of an out-of-line call.
+    #[inline]
     pub fn new(ray: &Ray) -> Option<PreparedRay> {
         let d = ray.dir;
         if !d.iter().all(|x| x.is_finite()) || d.iter().all(|&x| x == 0.0) {

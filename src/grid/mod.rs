@@ -30,7 +30,7 @@ use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
-use node::{front_to_back, test4, Box4};
+use node::{child_of, front_to_back, test4, Box4};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
@@ -555,9 +555,10 @@ impl GridMesh {
         let b = &self.blocks[bi];
         let boxes = &self.boxes[b.boxes as usize..b.boxes as usize + b.num_boxes()];
         let (mask, near) = test4(&b.root, r, tmax);
-        let (order, n) = front_to_back(mask, &near);
-        for &c in &order[..n] {
-            let c = c as usize;
+        let mut order = [0; 4];
+        let n = front_to_back(mask, &near, &mut order);
+        for &k in &order[..n] {
+            let c = child_of(k);
             if near[c] > tmax {
                 continue;
             }
@@ -571,9 +572,10 @@ impl GridMesh {
                 }
                 Slot::Node(q) => {
                     let (m2, near2) = test4(&boxes[q - 1], r, tmax);
-                    let (order2, n2) = front_to_back(m2, &near2);
-                    for &c2 in &order2[..n2] {
-                        let c2 = c2 as usize;
+                    let mut order2 = [0; 4];
+                    let n2 = front_to_back(m2, &near2, &mut order2);
+                    for &k2 in &order2[..n2] {
+                        let c2 = child_of(k2);
                         if near2[c2] > tmax {
                             continue;
                         }

@@ -169,25 +169,42 @@ pub fn test4(b: &Box4, r: &PreparedRay, tmax: f32) -> (u32, [f32; 4]) {
     }
 }
 
-/// The children in `mask`, nearest entry first (ties by child index).
+/// The sort key of child `c` entered at distance `d`: the distance's bits mapped to an
+/// unsigned order (the order of `f32::total_cmp`) above the child index in the low byte.
 #[inline(always)]
-pub fn front_to_back<const N: usize>(mask: u32, near: &[f32; N]) -> ([u8; N], usize) {
-    let mut order = [0u8; N];
+fn order_key(d: f32, c: usize) -> u64 {
+    let b = d.to_bits();
+    let ordered = if b >> 31 != 0 { !b } else { b | 1 << 31 };
+    (ordered as u64) << 32 | c as u64
+}
+
+/// Writes the children in `mask` to `keys[..n]`, nearest entry first (ties by child index),
+/// each child's index in its key's low byte ([`child_of`]), and returns `n`. The keys are
+/// written and read as 64-bit words in the caller's array: a returned array would be copied
+/// with wide loads over the insertion's narrower stores, which stalls store forwarding.
+#[inline(always)]
+pub fn front_to_back<const N: usize>(mask: u32, near: &[f32; N], keys: &mut [u64; N]) -> usize {
     let mut n = 0;
     let mut m = mask;
     while m != 0 {
         let c = m.trailing_zeros() as usize;
         m &= m - 1;
-        // Insertion: children arrive in index order, so `<` keeps ties in index order.
+        let k = order_key(near[c], c);
         let mut i = n;
-        while i > 0 && near[c] < near[order[i - 1] as usize] {
-            order[i] = order[i - 1];
+        while i > 0 && k < keys[i - 1] {
+            keys[i] = keys[i - 1];
             i -= 1;
         }
-        order[i] = c as u8;
+        keys[i] = k;
         n += 1;
     }
-    (order, n)
+    n
+}
+
+/// The child index of a [`front_to_back`] key.
+#[inline(always)]
+pub fn child_of(key: u64) -> usize {
+    (key & 0xFF) as usize
 }
 
 /// [`test8_scalar`] bit for bit: one AVX2 pass with `AVX2`, else two SSE2 halves (the
@@ -326,9 +343,23 @@ mod tests {
 
     #[test]
     fn order_is_front_to_back() {
-        let (o, n) = front_to_back(0b1010_0110, &[0.0, 5.0, 2.0, 9.0, 9.0, 2.0, 0.0, 1.0]);
-        assert_eq!((n, &o[..n]), (4, &[7u8, 2, 5, 1][..]));
-        let (o, n) = front_to_back(0b1011, &[3.0, 1.0, 0.0, 1.0]);
-        assert_eq!((n, &o[..n]), (3, &[1u8, 3, 0][..]));
+        let order = |mask: u32, near: &[f32; 8]| {
+            let mut k = [0; 8];
+            let n = front_to_back(mask, near, &mut k);
+            k[..n].iter().map(|&k| child_of(k)).collect::<Vec<_>>()
+        };
+        let near = [0.0, 5.0, 2.0, 9.0, 9.0, 2.0, 0.0, 1.0];
+        assert_eq!(order(0b1010_0110, &near), [7, 2, 5, 1]);
+        assert_eq!(order(0b1111_1111, &near), [0, 6, 7, 2, 5, 1, 3, 4]);
+        // Negative distances (a ray starting inside boxes with `tmin < 0`) come first,
+        // infinities last.
+        let far = [3.0, -1.0, f32::INFINITY, -0.5, 1.0, 0.0, -2.0, 3.0];
+        assert_eq!(order(0xFF, &far), [6, 1, 3, 5, 4, 0, 7, 2]);
+        let mut o = [0; 4];
+        let n = front_to_back(0b1011, &[3.0, 1.0, 0.0, 1.0], &mut o);
+        assert_eq!(
+            o[..n].iter().map(|&k| child_of(k)).collect::<Vec<_>>(),
+            [1, 3, 0]
+        );
     }
 }

@@ -7,7 +7,7 @@
 //! the primitives' boxes, never taken from the builder), so the conservative box test of
 //! [`crate::bvh::triangle::PreparedRay::hits_box`] can never cull a primitive the ray meets.
 
-use super::node::{test8, Box8};
+use super::node::{child_of, front_to_back, test8, Box8};
 use crate::bvh::triangle::PreparedRay;
 use glam::Vec3A;
 use obvhs::bvh2::builder::build_bvh2;
@@ -229,7 +229,13 @@ impl Top {
 
     /// Walks the top level front to back: `visit(prim, tmax)` for each primitive whose box the
     /// ray meets within the current `tmax`, returning the new `tmax` and whether to stop;
-    /// `prefetch(prim)` when a primitive is pushed. The node test is [`test8`]'s with `AVX2`.
+    /// `prefetch(prim)` when a primitive is reached or pushed. The node test is [`test8`]'s
+    /// with `AVX2`.
+    ///
+    /// The nearest child met goes on at once, without the stack; only the others are pushed,
+    /// far to near, with their entry distances, and skipped when popped beyond `tmax`. The
+    /// stack is a fixed array when [`Top::stack`] fits it (it bounds this walk too: it counts
+    /// every child met as pushed), else one heap array of that size.
     ///
     /// # Safety
     /// With `AVX2`, the processor must have AVX2.
@@ -241,43 +247,78 @@ impl Top {
         mut visit: impl FnMut(u32, f32) -> (f32, bool),
         prefetch: impl Fn(u32),
     ) {
-        if self.root == EMPTY {
+        if self.root == EMPTY || r.tmin > tmax {
             return;
         }
-        let mut stack = Stack::new();
-        stack.push((self.root, r.tmin));
-        while let Some((node, near)) = stack.pop() {
-            if near > tmax {
-                continue;
-            }
+        let mut fixed = [(0 as Ref, 0f32); FIXED_STACK];
+        let mut heap = Vec::new();
+        let stack: &mut [(Ref, f32)] = if self.stack <= FIXED_STACK {
+            &mut fixed
+        } else {
+            heap.resize(self.stack, (0, 0.0));
+            &mut heap
+        };
+        let mut len = 0;
+        let mut node = self.root;
+        loop {
             if node & LEAF != 0 {
                 let (t, stop) = visit(node & !LEAF, tmax);
                 tmax = t;
                 if stop {
                     return;
                 }
-                continue;
-            }
-            let n = &self.nodes[node as usize];
-            // SAFETY: this function's contract.
-            let (mask, d) = unsafe { test8::<AVX2>(&n.boxes, r, tmax) };
-            if mask == 0 {
-                continue;
-            }
-            // Push far to near: the nearest is popped first.
-            let (order, count) = super::node::front_to_back(mask, &d);
-            for &c in order[..count].iter().rev() {
-                let child = n.child[c as usize];
-                if child & LEAF != 0 {
-                    prefetch(child & !LEAF);
-                } else {
-                    prefetch_node(&self.nodes, child);
+            } else {
+                let n = &self.nodes[node as usize];
+                // SAFETY: this function's contract.
+                let (mask, d) = unsafe { test8::<AVX2>(&n.boxes, r, tmax) };
+                if mask != 0 {
+                    if mask & (mask - 1) == 0 {
+                        node = n.child[mask.trailing_zeros() as usize];
+                        if node & LEAF != 0 {
+                            prefetch(node & !LEAF);
+                        }
+                        continue;
+                    }
+                    let mut keys = [0; 8];
+                    let count = front_to_back(mask, &d, &mut keys);
+                    // Push far to near; the nearest goes on now.
+                    for &k in keys[1..count].iter().rev() {
+                        let c = child_of(k);
+                        let child = n.child[c];
+                        if child & LEAF != 0 {
+                            prefetch(child & !LEAF);
+                        } else {
+                            prefetch_node(&self.nodes, child);
+                        }
+                        stack[len] = (child, d[c]);
+                        len += 1;
+                    }
+                    node = n.child[child_of(keys[0])];
+                    if node & LEAF != 0 {
+                        prefetch(node & !LEAF);
+                    }
+                    continue;
                 }
-                stack.push((child, d[c as usize]));
+            }
+            // Pop the nearest waiting entry still within `tmax` (a NaN distance is kept).
+            loop {
+                if len == 0 {
+                    return;
+                }
+                len -= 1;
+                let (next, near) = stack[len];
+                if near > tmax {
+                    continue;
+                }
+                node = next;
+                break;
             }
         }
     }
 }
+
+/// Entries of the walk's stack held in a fixed array (deeper hierarchies use the heap).
+const FIXED_STACK: usize = 64;
 
 #[inline(always)]
 fn prefetch_node(nodes: &[Node8], i: u32) {
@@ -294,46 +335,6 @@ fn prefetch_node(nodes: &[Node8], i: u32) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (nodes, i);
-}
-
-/// A traversal stack: a fixed array, spilling to the heap on degenerate hierarchies.
-struct Stack {
-    fixed: [(Ref, f32); 64],
-    len: usize,
-    spill: Vec<(Ref, f32)>,
-}
-
-impl Stack {
-    #[inline(always)]
-    fn new() -> Stack {
-        Stack {
-            fixed: [(0, 0.0); 64],
-            len: 0,
-            spill: Vec::new(),
-        }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, e: (Ref, f32)) {
-        if self.len < self.fixed.len() {
-            self.fixed[self.len] = e;
-            self.len += 1;
-        } else {
-            self.spill.push(e);
-        }
-    }
-
-    #[inline(always)]
-    fn pop(&mut self) -> Option<(Ref, f32)> {
-        if let Some(e) = self.spill.pop() {
-            return Some(e);
-        }
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        Some(self.fixed[self.len])
-    }
 }
 
 #[cfg(test)]
@@ -360,6 +361,11 @@ mod tests {
                 .collect();
             let top = Top::build(&boxes);
             assert!(top.stack >= top.depth && top.stack <= (WIDTH - 1) * top.depth + 1);
+            // The same tree with a larger stack bound (still a bound) walks on the heap.
+            let on_heap = Top {
+                stack: FIXED_STACK + 1,
+                ..top.clone()
+            };
             for i in 0..200 {
                 let o: [f32; 3] = std::array::from_fn(|_| (rng.next_f64() * 14.0 - 2.0) as f32);
                 let d: [f32; 3] = std::array::from_fn(|a| {
@@ -374,7 +380,7 @@ mod tests {
                 let avx = crate::grid::window::has_avx2();
                 #[cfg(not(target_arch = "x86_64"))]
                 let avx = false;
-                for wide in [false, avx] {
+                for (wide, top) in [(false, &top), (avx, &top), (false, &on_heap)] {
                     let mut seen = vec![0u32; n];
                     let visit = |p: u32, t| {
                         seen[p as usize] += 1;

@@ -375,17 +375,22 @@ unsafe fn window_sse(r: &PreparedRay, rows: &Rows, lanes: u32, tmax: f32) -> Opt
             _mm_cmplt_ps(ts, _mm_mul_ps(tmin4, ad)),
             _mm_cmpgt_ps(ts, _mm_mul_ps(tmax4, ad)),
         );
+        let reject = _mm_or_ps(
+            _mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, zero)),
+            out_of_range,
+        );
+        // Most halves end here, before the division.
+        let hits = !(_mm_movemask_ps(reject) as u32) & group;
+        if hits == 0 {
+            continue;
+        }
         let rcp = _mm_div_ps(_mm_set1_ps(1.0), det);
         let t = _mm_mul_ps(t_scaled, rcp);
         let t_out = _mm_or_ps(_mm_cmplt_ps(t, tmin4), _mm_cmpgt_ps(t, tmax4));
-        let reject = _mm_or_ps(
-            _mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, zero)),
-            _mm_or_ps(out_of_range, t_out),
-        );
         // NaN comparisons are false, as in the scalar test: a NaN `t` is never rejected by
         // them and never accepted either (the scalar test's `t < tmin || t > tmax` is false
         // for NaN, so it would return it; keep that lane and let the comparison below see it).
-        let hits = !(_mm_movemask_ps(reject) as u32) & group;
+        let hits = hits & !(_mm_movemask_ps(t_out) as u32);
         if hits == 0 {
             continue;
         }
@@ -471,15 +476,16 @@ unsafe fn window_avx2(r: &PreparedRay, rows: &Rows, lanes: u32, tmax: f32) -> Op
         lt(ts, _mm256_mul_ps(tmin8, ad)),
         gt(ts, _mm256_mul_ps(tmax8, ad)),
     );
+    let reject = _mm256_or_ps(_mm256_or_ps(_mm256_and_ps(neg, pos), eq(det)), out_of_range);
+    // Most windows end here, before the division.
+    let hits = !(_mm256_movemask_ps(reject) as u32) & group;
+    if hits == 0 {
+        return None;
+    }
     let rcp = _mm256_div_ps(_mm256_set1_ps(1.0), det);
     let t = _mm256_mul_ps(t_scaled, rcp);
-    let t_out = _mm256_or_ps(lt(t, tmin8), gt(t, tmax8));
-    let reject = _mm256_or_ps(
-        _mm256_or_ps(_mm256_and_ps(neg, pos), eq(det)),
-        _mm256_or_ps(out_of_range, t_out),
-    );
     // NaN `t`: as in [`window_sse`].
-    let hits = !(_mm256_movemask_ps(reject) as u32) & group;
+    let hits = hits & !(_mm256_movemask_ps(_mm256_or_ps(lt(t, tmin8), gt(t, tmax8))) as u32);
     if hits == 0 {
         return None;
     }
