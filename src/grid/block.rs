@@ -197,18 +197,26 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
     let q = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0) as u32;
     let (qx, qy) = (q(x), q(y));
     let (qx1, qy1) = ((qx + 1).min(65535), (qy + 1).min(65535));
+    #[cfg(target_arch = "x86_64")]
+    if super::window::has_avx2() {
+        // SAFETY: AVX2 is present (detected).
+        return unsafe { oct_best_avx2(n, [qx, qx1], [qy, qy1]) };
+    }
+    oct_best(n, [qx, qx1], [qy, qy1])
+}
+
+/// The code among `(qx[dx], qy[dy])` (in the order `dy`, then `dx`) whose decoded direction
+/// is nearest `n`: the largest cosine, in `f64` (`1 − cos` of these angles is below `f32`'s
+/// resolution), of the direction before its normalisation, so no square root per candidate:
+/// cos² with its sign, `dot·|dot| / len²`, compared cross-multiplied (no division); the first
+/// of equals is kept.
+fn oct_best(n: [f32; 3], qx: [u32; 2], qy: [u32; 2]) -> u32 {
     // The candidates' coordinates before folding, each computed once ([`oct_direction`]).
-    let (xs, ys) = (
-        [oct_coord(qx), oct_coord(qx1)],
-        [oct_coord(qy), oct_coord(qy1)],
-    );
-    // The largest cosine, in `f64` (`1 − cos` of these angles is below `f32`'s resolution),
-    // of the decoded direction before its normalisation: no square root per candidate.
+    let (xs, ys) = (qx.map(oct_coord), qy.map(oct_coord));
     let nd = n.map(f64::from);
-    // cos² with its sign, dot·|dot| / len², compared cross-multiplied (no division).
     let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
-    for (dy, &cy) in [qy, qy1].iter().enumerate() {
-        for (dx, &cx) in [qx, qx1].iter().enumerate() {
+    for (dy, &cy) in qy.iter().enumerate() {
+        for (dx, &cx) in qx.iter().enumerate() {
             let w = oct_fold(xs[dx], ys[dy]).map(f64::from);
             let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
             let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
@@ -218,6 +226,68 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
             best_len2 = if better { len2 } else { best_len2 };
             best = if better { cx | (cy << 16) } else { best };
         }
+    }
+    best
+}
+
+/// [`oct_best`] bit for bit, its four candidates side by side: the fold in four `f32`
+/// lanes, the cosines in four `f64` lanes (the same operations in the same order, no FMA),
+/// the choice scalar and in the same order.
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn oct_best_avx2(n: [f32; 3], qx: [u32; 2], qy: [u32; 2]) -> u32 {
+    use std::arch::x86_64::*;
+    let (xs, ys) = (qx.map(oct_coord), qy.map(oct_coord));
+    // Lanes in the scalar loop's order: (x0, y0), (x1, y0), (x0, y1), (x1, y1).
+    let x = _mm_setr_ps(xs[0], xs[1], xs[0], xs[1]);
+    let y = _mm_setr_ps(ys[0], ys[0], ys[1], ys[1]);
+    let zero = _mm_setzero_ps();
+    let one = _mm_set1_ps(1.0);
+    let sign = _mm_set1_ps(-0.0);
+    let (ax, ay) = (_mm_andnot_ps(sign, x), _mm_andnot_ps(sign, y));
+    let z = _mm_sub_ps(_mm_sub_ps(one, ax), ay);
+    // Folded: `(1 − |y|)·±1` is `1 − |y|` with its sign flipped where `x < 0` (`x ≥ 0`
+    // false), exactly as the multiplication by −1 does.
+    let fx = _mm_xor_ps(
+        _mm_sub_ps(one, ay),
+        _mm_andnot_ps(_mm_cmpge_ps(x, zero), sign),
+    );
+    let fy = _mm_xor_ps(
+        _mm_sub_ps(one, ax),
+        _mm_andnot_ps(_mm_cmpge_ps(y, zero), sign),
+    );
+    let lower = _mm_cmplt_ps(z, zero);
+    let wx = _mm256_cvtps_pd(_mm_blendv_ps(x, fx, lower));
+    let wy = _mm256_cvtps_pd(_mm_blendv_ps(y, fy, lower));
+    let wz = _mm256_cvtps_pd(z);
+    let [n0, n1, n2] = n.map(|c| _mm256_set1_pd(f64::from(c)));
+    let dot = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(wx, n0), _mm256_mul_pd(wy, n1)),
+        _mm256_mul_pd(wz, n2),
+    );
+    let len2 = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy)),
+        _mm256_mul_pd(wz, wz),
+    );
+    let num = _mm256_mul_pd(dot, _mm256_andnot_pd(_mm256_set1_pd(-0.0), dot));
+    let (mut nums, mut lens) = ([0f64; 4], [0f64; 4]);
+    _mm256_storeu_pd(nums.as_mut_ptr(), num);
+    _mm256_storeu_pd(lens.as_mut_ptr(), len2);
+    let codes = [
+        qx[0] | qy[0] << 16,
+        qx[1] | qy[0] << 16,
+        qx[0] | qy[1] << 16,
+        qx[1] | qy[1] << 16,
+    ];
+    let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
+    for i in 0..4 {
+        let better = nums[i] * best_len2 > best_num * lens[i];
+        best_num = if better { nums[i] } else { best_num };
+        best_len2 = if better { lens[i] } else { best_len2 };
+        best = if better { codes[i] } else { best };
     }
     best
 }
@@ -355,7 +425,28 @@ mod tests {
             });
         }
         for n in special {
-            assert_eq!(oct_encode(n), oct_encode_reference(n), "{n:?}");
+            let want = oct_encode_reference(n);
+            assert_eq!(oct_encode(n), want, "{n:?}");
+            // The scalar chooser, whichever one `oct_encode` dispatched to.
+            let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+            if l1 > 0.0 && l1.is_finite() {
+                let (qx, qy) = (want & 0xFFFF, want >> 16);
+                let near = |q: u32| [q.saturating_sub(1), q, (q + 1).min(65535)];
+                // Every pair of neighbouring candidates around the chosen code: the AVX2
+                // chooser (when present) picks as the scalar one does.
+                for x0 in near(qx) {
+                    for y0 in near(qy) {
+                        let (xq, yq) = ([x0, (x0 + 1).min(65535)], [y0, (y0 + 1).min(65535)]);
+                        let scalar = oct_best(n, xq, yq);
+                        #[cfg(target_arch = "x86_64")]
+                        if crate::grid::window::has_avx2() {
+                            // SAFETY: AVX2 is present (detected).
+                            assert_eq!(unsafe { oct_best_avx2(n, xq, yq) }, scalar, "{n:?}");
+                        }
+                        assert!([xq[0], xq[1]].contains(&(scalar & 0xFFFF)));
+                    }
+                }
+            }
         }
     }
 
