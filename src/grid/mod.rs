@@ -542,10 +542,11 @@ impl GridMesh {
         )
     }
 
-    /// Walks block `bi`'s hierarchy front to back, calling `leaf(wx, wy, tmax)` for each
-    /// window met; `leaf` returns the new `tmax` and whether to stop.
+    /// Walks block `bi`'s hierarchy front to back (in child order without `ORDERED`: any-hit
+    /// queries), calling `leaf(wx, wy, tmax)` for each window met; `leaf` returns the new
+    /// `tmax` and whether to stop.
     #[inline(always)]
-    fn walk_block(
+    fn walk_block<const ORDERED: bool>(
         &self,
         bi: usize,
         r: &PreparedRay,
@@ -556,7 +557,7 @@ impl GridMesh {
         let boxes = &self.boxes[b.boxes as usize..b.boxes as usize + b.num_boxes()];
         let (mask, near) = test4(&b.root, r, tmax);
         let mut order = [0; 4];
-        let n = front_to_back(mask, &near, &mut order);
+        let n = in_order::<ORDERED>(mask, &near, &mut order);
         for &k in &order[..n] {
             let c = child_of(k);
             if near[c] > tmax {
@@ -573,7 +574,7 @@ impl GridMesh {
                 Slot::Node(q) => {
                     let (m2, near2) = test4(&boxes[q - 1], r, tmax);
                     let mut order2 = [0; 4];
-                    let n2 = front_to_back(m2, &near2, &mut order2);
+                    let n2 = in_order::<ORDERED>(m2, &near2, &mut order2);
                     for &k2 in &order2[..n2] {
                         let c2 = child_of(k2);
                         if near2[c2] > tmax {
@@ -649,7 +650,7 @@ impl GridMesh {
                     }
                     (tmax, false)
                 };
-                let (t, _) = self.walk_block(prim, &r, tmax, &mut leaf);
+                let (t, _) = self.walk_block::<true>(prim, &r, tmax, &mut leaf);
                 (t, false)
             } else {
                 let [first, count] = self.strips[prim - nblocks];
@@ -676,7 +677,7 @@ impl GridMesh {
         // SAFETY: this function's contract.
         unsafe {
             self.top
-                .walk::<AVX2>(&r, r.tmax, visit, |p| self.prefetch(p))
+                .walk::<AVX2, true>(&r, r.tmax, visit, |p| self.prefetch(p))
         };
         best.map(|b| self.hit(b))
     }
@@ -723,7 +724,7 @@ impl GridMesh {
                     let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
                     (tmax, found.is_some())
                 };
-                hit = self.walk_block(prim, &r, tmax, &mut leaf).1;
+                hit = self.walk_block::<false>(prim, &r, tmax, &mut leaf).1;
             } else {
                 let [first, count] = self.strips[prim - nblocks];
                 hit = self.loose[first as usize..(first + count) as usize]
@@ -735,7 +736,7 @@ impl GridMesh {
         // SAFETY: this function's contract.
         unsafe {
             self.top
-                .walk::<AVX2>(&r, r.tmax, visit, |p| self.prefetch(p))
+                .walk::<AVX2, false>(&r, r.tmax, visit, |p| self.prefetch(p))
         };
         hit
     }
@@ -813,6 +814,23 @@ impl GridMesh {
             Found::Loose(li) => self.loose[li as usize].n.map(oct_decode),
         }
     }
+}
+
+/// The children in `mask` as [`front_to_back`] keys: sorted with `ORDERED`, else in child
+/// order.
+#[inline(always)]
+fn in_order<const ORDERED: bool>(mask: u32, near: &[f32; 4], keys: &mut [u64; 4]) -> usize {
+    if ORDERED {
+        return front_to_back(mask, near, keys);
+    }
+    let mut n = 0;
+    let mut m = mask;
+    while m != 0 {
+        keys[n] = m.trailing_zeros() as u64;
+        m &= m - 1;
+        n += 1;
+    }
+    n
 }
 
 /// The grid vertices `(x, y)` of half `h` of quad `(x, y)`: `[a, b, c]` or `[a, c, d]`.

@@ -233,14 +233,16 @@ impl Top {
     /// with `AVX2`.
     ///
     /// The nearest child met goes on at once, without the stack; only the others are pushed,
-    /// far to near, with their entry distances, and skipped when popped beyond `tmax`. The
+    /// far to near, with their entry distances, and skipped when popped beyond `tmax`.
+    /// Without `ORDERED` (any-hit queries, whose answer does not depend on the order) nothing
+    /// is sorted: the lowest child met goes on, the others are pushed as they come. The
     /// stack is a fixed array when [`Top::stack`] fits it (it bounds this walk too: it counts
     /// every child met as pushed), else one heap array of that size.
     ///
     /// # Safety
     /// With `AVX2`, the processor must have AVX2.
     #[inline(always)]
-    pub unsafe fn walk<const AVX2: bool>(
+    pub unsafe fn walk<const AVX2: bool, const ORDERED: bool>(
         &self,
         r: &PreparedRay,
         mut tmax: f32,
@@ -273,6 +275,26 @@ impl Top {
                 let (mask, d) = unsafe { test8::<AVX2>(&n.boxes, r, tmax) };
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
+                        node = n.child[mask.trailing_zeros() as usize];
+                        if node & LEAF != 0 {
+                            prefetch(node & !LEAF);
+                        }
+                        continue;
+                    }
+                    if !ORDERED {
+                        let mut rest = mask & (mask - 1);
+                        while rest != 0 {
+                            let c = rest.trailing_zeros() as usize;
+                            rest &= rest - 1;
+                            let child = n.child[c];
+                            if child & LEAF != 0 {
+                                prefetch(child & !LEAF);
+                            } else {
+                                prefetch_node(&self.nodes, child);
+                            }
+                            stack[len] = (child, d[c]);
+                            len += 1;
+                        }
                         node = n.child[mask.trailing_zeros() as usize];
                         if node & LEAF != 0 {
                             prefetch(node & !LEAF);
@@ -347,6 +369,7 @@ mod tests {
     /// each once, on random boxes of many sizes.
     #[test]
     fn walk_finds_every_box_met() {
+        const INF: f32 = f32::INFINITY;
         let mut rng = SplitMix64(21);
         for n in [1usize, 2, 3, 5, 17, 300, 2000] {
             let boxes: Vec<[[f32; 3]; 2]> = (0..n)
@@ -380,7 +403,12 @@ mod tests {
                 let avx = crate::grid::window::has_avx2();
                 #[cfg(not(target_arch = "x86_64"))]
                 let avx = false;
-                for (wide, top) in [(false, &top), (avx, &top), (false, &on_heap)] {
+                for (wide, top, ordered) in [
+                    (false, &top, true),
+                    (avx, &top, true),
+                    (false, &on_heap, true),
+                    (avx, &top, false),
+                ] {
                     let mut seen = vec![0u32; n];
                     let visit = |p: u32, t| {
                         seen[p as usize] += 1;
@@ -388,10 +416,11 @@ mod tests {
                     };
                     // SAFETY: AVX2 only where detected.
                     unsafe {
-                        if wide {
-                            top.walk::<true>(&r, f32::INFINITY, visit, |_| {});
-                        } else {
-                            top.walk::<false>(&r, f32::INFINITY, visit, |_| {});
+                        match (wide, ordered) {
+                            (true, true) => top.walk::<true, true>(&r, INF, visit, |_| {}),
+                            (true, false) => top.walk::<true, false>(&r, INF, visit, |_| {}),
+                            (false, true) => top.walk::<false, true>(&r, INF, visit, |_| {}),
+                            (false, false) => top.walk::<false, false>(&r, INF, visit, |_| {}),
                         }
                     }
                     for (p, b) in boxes.iter().enumerate() {
