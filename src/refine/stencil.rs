@@ -97,6 +97,13 @@ impl StencilTable {
             .extend(other.offsets[1..].iter().map(|&o| o + base));
     }
 
+    /// Reserves room for `rows` more rows of `terms` terms in all.
+    pub fn reserve(&mut self, rows: usize, terms: usize) {
+        self.offsets.reserve(rows);
+        self.indices.reserve(terms);
+        self.weights.reserve(terms);
+    }
+
     /// Appends a row given as `(input, weight)` terms (taken as they are).
     pub fn push_terms(&mut self, terms: &[(u32, f64)]) {
         self.push_iter(terms.iter().copied());

@@ -108,60 +108,178 @@ impl PatchTable {
         (self.nodes.len() - 1) as u32
     }
 
-    /// Settles face `g` of `level` (whose vertices are `rows` over the base vertices) into
-    /// node `slot`: a hole, a regular patch, an end cap at the maximum level, or a face to
-    /// refine further (returned).
-    /// A `forced` face is refined whatever it is (a hierarchical edit acts below it).
-    fn settle(
+    /// Settles face `g` of `level` (whose vertices are numbered from `offset` among the
+    /// table's refined vertices) into node `slot`, as [`decide`] found it (`rows`: its
+    /// control points' combinations, one per point): a hole, a regular patch, a Stam patch, an
+    /// end cap at the maximum level, or a face to refine further (returned).
+    fn settle<'a>(
+        &mut self,
+        found: Found,
+        mut rows: impl Iterator<Item = &'a [(u32, f64)]>,
+        offset: u32,
+        (g, slot): (usize, u32),
+        depth: usize,
+    ) -> Option<(u32, Slot)> {
+        match found {
+            Found::Hole => {
+                self.nodes[slot as usize] = Node::Empty;
+                None
+            }
+            Found::Stam(corner, n) => {
+                let verts: Vec<u32> = rows.by_ref().take(n).map(|r| offset + r[0].0).collect();
+                self.add_stam(slot, corner, &verts, depth);
+                None
+            }
+            Found::Regular(kind) => {
+                let first = self.point_stencils.len() as u32;
+                for row in rows.by_ref().take(16) {
+                    self.point_stencils
+                        .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
+                }
+                self.add_leaf(
+                    slot,
+                    Patch {
+                        kind: patch_kind(kind),
+                        level: depth as u8,
+                        first_point: first,
+                        end_cap: 0,
+                        ..Patch::UNSET
+                    },
+                );
+                None
+            }
+            Found::Irregular if depth >= self.options.max_level => {
+                Some((g as u32, Slot::Cap(slot)))
+            }
+            Found::Irregular => Some((g as u32, Slot::Quad(slot))),
+        }
+    }
+
+    /// Decides faces `jobs` (face of `level`, forced) in parallel, in chunks (bounded
+    /// memory), and settles them in order into their nodes `slot_of(i)`: the table comes out
+    /// as a sequential pass would make it. Each worker writes its decisions and their rows
+    /// into buffers of its own (a few allocations per chunk, not one per row freed by
+    /// another thread). Returns the faces to refine further.
+    fn settle_all(
         &mut self,
         level: &Level,
         offset: u32,
-        g: usize,
-        slot: u32,
+        jobs: &[(u32, bool)],
+        slot_of: impl Fn(usize) -> u32,
         depth: usize,
-        forced: bool,
-    ) -> Option<(u32, Slot)> {
-        if level.face_hole[g] {
-            self.nodes[slot as usize] = Node::Empty;
-            return None;
-        }
-        let found = if forced {
-            None
-        } else {
-            classify(level, g, self.options.single_crease)
-        };
-        if found.is_none() && !forced && self.use_stam {
-            // A quad with one smooth extraordinary corner is exact in constant time from its
-            // one-ring: no need to isolate it down to the maximum level.
-            if let Some((corner, verts)) = stam::gather(level, g) {
-                let verts: Vec<u32> = verts.iter().map(|&v| offset + v).collect();
-                self.add_stam(slot, corner, &verts, depth);
-                return None;
-            }
-        }
-        if let Some((kind, cps)) = found {
-            let first = self.point_stencils.len() as u32;
-            for c in &cps {
-                self.point_stencils
-                    .push_iter(c.iter().map(|&(v, w)| (offset + v, w)));
-            }
-            self.add_leaf(
-                slot,
-                Patch {
-                    kind: patch_kind(kind),
-                    level: depth as u8,
-                    first_point: first,
-                    end_cap: 0,
-                    ..Patch::UNSET
-                },
+    ) -> Vec<(u32, Slot)> {
+        use rayon::prelude::*;
+        const CHUNK: usize = 8192;
+        let (single_crease, use_stam) = (self.options.single_crease, self.use_stam);
+        let mut out = Vec::new();
+        let mut next = 0;
+        for chunk in jobs.chunks(CHUNK) {
+            let parts: Vec<Decided> = chunk
+                .par_iter()
+                .with_min_len(256)
+                .fold(Decided::default, |mut part, &(g, forced)| {
+                    let found = decide(
+                        level,
+                        g as usize,
+                        forced,
+                        single_crease,
+                        use_stam,
+                        &mut part,
+                    );
+                    part.found.push(found);
+                    part
+                })
+                .collect();
+            self.point_stencils.reserve(
+                parts.iter().map(|p| p.ends.len()).sum(),
+                parts.iter().map(|p| p.terms.len()).sum(),
             );
-            return None;
+            self.patches
+                .reserve(parts.iter().map(|p| p.found.len()).sum());
+            for part in parts {
+                let mut rows = part.rows();
+                for &found in &part.found {
+                    let (g, slot) = (jobs[next].0 as usize, slot_of(next));
+                    next += 1;
+                    out.extend(self.settle(found, &mut rows, offset, (g, slot), depth));
+                }
+            }
         }
-        if depth >= self.options.max_level {
-            return Some((g as u32, Slot::Cap(slot)));
-        }
-        Some((g as u32, Slot::Quad(slot)))
+        out
     }
+}
+
+/// What a face of a level becomes, decided from the level alone (so faces are decided in
+/// parallel and settled in order); its control points are rows of a [`Decided`].
+#[derive(Clone, Copy)]
+enum Found {
+    /// A hole: no surface.
+    Hole,
+    /// A Stam patch: the extraordinary corner, and the number of control points (rows of one
+    /// term each, in [`stam::gather`]'s order).
+    Stam(usize, usize),
+    /// A regular patch: sixteen rows, its control points' combinations.
+    Regular(RegularKind),
+    /// Irregular: refined further, or an end cap at the maximum level.
+    Irregular,
+}
+
+/// A run of decisions and their control points' rows (terms in the level's numbering).
+#[derive(Default)]
+struct Decided {
+    found: Vec<Found>,
+    ends: Vec<u32>,
+    terms: Vec<(u32, f64)>,
+}
+
+impl Decided {
+    fn push_row(&mut self, terms: impl IntoIterator<Item = (u32, f64)>) {
+        self.terms.extend(terms);
+        self.ends.push(self.terms.len() as u32);
+    }
+
+    /// The rows, in order.
+    fn rows(&self) -> impl Iterator<Item = &[(u32, f64)]> {
+        let starts = std::iter::once(0).chain(self.ends.iter().copied());
+        starts
+            .zip(&self.ends)
+            .map(|(a, &b)| &self.terms[a as usize..b as usize])
+    }
+}
+
+/// Decides face `g` of `level`, writing its control points' rows to `part`. A `forced` face
+/// is refined whatever it is (a hierarchical edit acts below it); with `use_stam`, a quad
+/// with one smooth extraordinary corner is exact in constant time from its one-ring, with no
+/// need to isolate it to the maximum level.
+fn decide(
+    level: &Level,
+    g: usize,
+    forced: bool,
+    single_crease: bool,
+    use_stam: bool,
+    part: &mut Decided,
+) -> Found {
+    if level.face_hole[g] {
+        return Found::Hole;
+    }
+    if forced {
+        return Found::Irregular;
+    }
+    if let Some((kind, cps)) = classify(level, g, single_crease) {
+        for c in cps {
+            part.push_row(c);
+        }
+        return Found::Regular(kind);
+    }
+    if use_stam {
+        if let Some((corner, verts)) = stam::gather(level, g) {
+            for &v in &verts {
+                part.push_row([(v, 1.0)]);
+            }
+            return Found::Stam(corner, verts.len());
+        }
+    }
+    Found::Irregular
 }
 
 impl PatchTable {
@@ -320,14 +438,17 @@ impl PatchTable {
             .collect();
         let mut forced = near_edits(&base, &tracks);
         let mut pending: Vec<(u32, Slot)> = Vec::new();
+        // Quads are settled after every root exists (nodes are only made here, so their
+        // numbering is unchanged), n-gons are refined first.
+        let mut quads: Vec<(u32, bool)> = Vec::new();
+        let mut quad_slots: Vec<u32> = Vec::new();
         for f in 0..base.num_faces() {
             let n = base.topo.face_size(f);
             if n == 4 {
                 let slot = table.new_node(f as u32, 0, Frame::UNIT);
                 table.roots.push(slot);
-                if let Some(p) = table.settle(&base, 0, f, slot, 0, forced.contains(&(f as u32))) {
-                    pending.push(p);
-                }
+                quads.push((f as u32, forced.contains(&(f as u32))));
+                quad_slots.push(slot);
             } else {
                 let first = table.nodes.len() as u32;
                 for k in 0..n {
@@ -340,6 +461,11 @@ impl PatchTable {
             }
             table.root_offsets.push(table.roots.len() as u32);
         }
+        let mut settled = table.settle_all(&base, 0, &quads, |i| quad_slots[i], 0);
+        // Pending faces in base face order, as one pass over the faces would list them.
+        settled.append(&mut pending);
+        settled.sort_by_key(|p| p.0);
+        let mut pending = settled;
         // Refine what is irregular, level by level, on the union of two-ring neighbourhoods.
         let mut level = base;
         let mut total = nb as u32;
@@ -377,8 +503,8 @@ impl PatchTable {
             total += child.num_vertices() as u32;
             table.stats.refined_vertices += child.num_vertices();
             depth += 1;
-            let mut next = Vec::new();
-            let mut caps = Vec::new();
+            let mut jobs: Vec<(u32, bool)> = Vec::new();
+            let mut job_slots: Vec<u32> = Vec::new();
             for (&(_, slot), &g) in pending.iter().zip(&seed_new) {
                 let g = g as usize;
                 let slots: Vec<u32> = match slot {
@@ -394,13 +520,17 @@ impl PatchTable {
                     }
                 };
                 for (k, &s) in slots.iter().enumerate() {
-                    let c = child_face(&sub, g, k);
-                    let force = forced.contains(&(c as u32));
-                    match table.settle(&child, child_offset, c, s, depth, force) {
-                        Some((c, Slot::Cap(node))) => caps.push((c, node)),
-                        Some(p) => next.push(p),
-                        None => {}
-                    }
+                    let c = child_face(&sub, g, k) as u32;
+                    jobs.push((c, forced.contains(&c)));
+                    job_slots.push(s);
+                }
+            }
+            let mut next = Vec::new();
+            let mut caps = Vec::new();
+            for p in table.settle_all(&child, child_offset, &jobs, |i| job_slots[i], depth) {
+                match p {
+                    (c, Slot::Cap(node)) => caps.push((c, node)),
+                    p => next.push(p),
                 }
             }
             if !caps.is_empty() {
