@@ -56,14 +56,25 @@ pub(super) fn parallel_rows<F>(count: usize, num_inputs: usize, row: F) -> Stenc
 where
     F: Fn(usize, &mut Accumulator) + Sync,
 {
+    parallel_rows_with(count, num_inputs, |i, acc, _: &mut ()| row(i, acc))
+}
+
+/// [`parallel_rows`] with scratch space `S` per chunk, handed to every row of the chunk (so a
+/// row's gathered neighbourhood reuses one buffer instead of allocating its own).
+pub(super) fn parallel_rows_with<S, F>(count: usize, num_inputs: usize, row: F) -> StencilTable
+where
+    S: Default,
+    F: Fn(usize, &mut Accumulator, &mut S) + Sync,
+{
     let parts: Vec<StencilTable> = (0..count.div_ceil(CHUNK))
         .into_par_iter()
         .with_min_len(crate::threads::min_len())
         .map(|c| {
             let mut t = StencilTable::new(num_inputs);
             let mut acc = Accumulator::new();
+            let mut scratch = S::default();
             for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
-                row(i, &mut acc);
+                row(i, &mut acc, &mut scratch);
                 t.push_row(&mut acc);
             }
             t
@@ -139,40 +150,36 @@ pub(super) fn vertex_rows(
 ) -> StencilTable {
     let topo = &parent.topo;
     let nv = parent.num_vertices();
-    parallel_rows(nv, nv, |v, acc| {
+    type Scratch<'a> = (Vec<u32>, Vec<f32>, Vec<f32>, Vec<&'a [u32]>);
+    parallel_rows_with(nv, nv, |v, acc, (ends, es, cs, faces): &mut Scratch| {
         let edges = topo.vertex_edges(v);
-        let ends: Vec<u32> = edges
-            .iter()
-            .map(|&e| topo.other_vertex(e, v as u32))
-            .collect();
-        let es: Vec<f32> = edges
-            .iter()
-            .map(|&e| parent.edge_sharpness[e as usize])
-            .collect();
-        let cs: Vec<f32> = edges
-            .iter()
-            .map(|&e| {
-                let end = if topo.edge_verts[e as usize][0] == v as u32 {
-                    0
-                } else {
-                    1
-                };
-                halves[e as usize][end]
-            })
-            .collect();
-        let faces: Vec<&[u32]> = topo
-            .vertex_faces(v)
-            .iter()
-            .map(|&f| topo.face_vertices(f as usize))
-            .collect();
+        ends.clear();
+        ends.extend(edges.iter().map(|&e| topo.other_vertex(e, v as u32)));
+        es.clear();
+        es.extend(edges.iter().map(|&e| parent.edge_sharpness[e as usize]));
+        cs.clear();
+        cs.extend(edges.iter().map(|&e| {
+            let end = if topo.edge_verts[e as usize][0] == v as u32 {
+                0
+            } else {
+                1
+            };
+            halves[e as usize][end]
+        }));
+        faces.clear();
+        faces.extend(
+            topo.vertex_faces(v)
+                .iter()
+                .map(|&f| topo.face_vertices(f as usize)),
+        );
         mask(
             acc,
             &VertexRing {
                 center: v as u32,
-                edge_ends: &ends,
-                edge_sharpness: &es,
-                child_edge_sharpness: &cs,
-                faces: &faces,
+                edge_ends: ends,
+                edge_sharpness: es,
+                child_edge_sharpness: cs,
+                faces,
                 sharpness: parent.vertex_sharpness[v],
                 child_sharpness: child_vertex_sharpness[v],
             },
@@ -249,19 +256,20 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
     // Stencils: vertex children, face points, edge points.
     let vertex_rows = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
     let face_rows = parallel_rows(nf, nv, |f, acc| face_mask(acc, topo.face_vertices(f), 1.0));
-    let edge_rows = parallel_rows(ne, nv, |e, acc| {
+    let edge_rows = parallel_rows_with(ne, nv, |e, acc, faces: &mut Vec<&[u32]>| {
         let [a, b] = topo.edge_verts[e];
-        let faces: Vec<&[u32]> = topo
-            .edge_face_list(e as u32)
-            .iter()
-            .map(|&f| topo.face_vertices(f as usize))
-            .collect();
+        faces.clear();
+        faces.extend(
+            topo.edge_face_list(e as u32)
+                .iter()
+                .map(|&f| topo.face_vertices(f as usize)),
+        );
         let [h0, h1] = halves[e];
         edge_mask(
             acc,
             a,
             b,
-            &faces,
+            faces,
             parent.edge_sharpness[e],
             crease::is_sharp(h0) && crease::is_sharp(h1),
             parent.smooth_triangles,
