@@ -214,18 +214,30 @@ fn oct_best(n: [f32; 3], qx: [u32; 2], qy: [u32; 2]) -> u32 {
     // The candidates' coordinates before folding, each computed once ([`oct_direction`]).
     let (xs, ys) = (qx.map(oct_coord), qy.map(oct_coord));
     let nd = n.map(f64::from);
+    let (mut nums, mut lens) = ([0f64; 4], [0f64; 4]);
+    for i in 0..4 {
+        let w = oct_fold(xs[i % 2], ys[i / 2]).map(f64::from);
+        let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
+        lens[i] = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+        nums[i] = dot * dot.abs();
+    }
+    oct_choose(&nums, &lens, qx, qy)
+}
+
+/// The code of the candidate (in [`oct_best`]'s order) with the largest `num / len2`,
+/// compared cross-multiplied; the first of equals.
+#[inline(always)]
+fn oct_choose(nums: &[f64; 4], lens: &[f64; 4], qx: [u32; 2], qy: [u32; 2]) -> u32 {
     let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
-    for (dy, &cy) in qy.iter().enumerate() {
-        for (dx, &cx) in qx.iter().enumerate() {
-            let w = oct_fold(xs[dx], ys[dy]).map(f64::from);
-            let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
-            let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-            let num = dot * dot.abs();
-            let better = num * best_len2 > best_num * len2;
-            best_num = if better { num } else { best_num };
-            best_len2 = if better { len2 } else { best_len2 };
-            best = if better { cx | (cy << 16) } else { best };
-        }
+    for i in 0..4 {
+        let better = nums[i] * best_len2 > best_num * lens[i];
+        best_num = if better { nums[i] } else { best_num };
+        best_len2 = if better { lens[i] } else { best_len2 };
+        best = if better {
+            qx[i % 2] | qy[i / 2] << 16
+        } else {
+            best
+        };
     }
     best
 }
@@ -276,20 +288,7 @@ unsafe fn oct_best_avx2(n: [f32; 3], qx: [u32; 2], qy: [u32; 2]) -> u32 {
     let (mut nums, mut lens) = ([0f64; 4], [0f64; 4]);
     _mm256_storeu_pd(nums.as_mut_ptr(), num);
     _mm256_storeu_pd(lens.as_mut_ptr(), len2);
-    let codes = [
-        qx[0] | qy[0] << 16,
-        qx[1] | qy[0] << 16,
-        qx[0] | qy[1] << 16,
-        qx[1] | qy[1] << 16,
-    ];
-    let (mut best_num, mut best_len2, mut best) = (f64::NEG_INFINITY, 1.0, 0);
-    for i in 0..4 {
-        let better = nums[i] * best_len2 > best_num * lens[i];
-        best_num = if better { nums[i] } else { best_num };
-        best_len2 = if better { lens[i] } else { best_len2 };
-        best = if better { codes[i] } else { best };
-    }
-    best
+    oct_choose(&nums, &lens, qx, qy)
 }
 
 /// One coordinate of an octahedral code's point before folding, in `[-1, 1]`.

@@ -30,7 +30,7 @@ use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
-use node::{child_of, front_to_back, test4, Box4};
+use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
@@ -557,7 +557,7 @@ impl GridMesh {
         let boxes = &self.boxes[b.boxes as usize..b.boxes as usize + b.num_boxes()];
         let (mask, near) = test4(&b.root, r, tmax);
         let mut order = [0; 4];
-        let n = in_order::<ORDERED>(mask, &near, &mut order);
+        let n = in_order::<ORDERED, 4>(mask, &near, &mut order);
         for &k in &order[..n] {
             let c = child_of(k);
             if near[c] > tmax {
@@ -574,7 +574,7 @@ impl GridMesh {
                 Slot::Node(q) => {
                     let (m2, near2) = test4(&boxes[q - 1], r, tmax);
                     let mut order2 = [0; 4];
-                    let n2 = in_order::<ORDERED>(m2, &near2, &mut order2);
+                    let n2 = in_order::<ORDERED, 4>(m2, &near2, &mut order2);
                     for &k2 in &order2[..n2] {
                         let c2 = child_of(k2);
                         if near2[c2] > tmax {
@@ -814,23 +814,6 @@ impl GridMesh {
             Found::Loose(li) => self.loose[li as usize].n.map(oct_decode),
         }
     }
-}
-
-/// The children in `mask` as [`front_to_back`] keys: sorted with `ORDERED`, else in child
-/// order.
-#[inline(always)]
-fn in_order<const ORDERED: bool>(mask: u32, near: &[f32; 4], keys: &mut [u64; 4]) -> usize {
-    if ORDERED {
-        return front_to_back(mask, near, keys);
-    }
-    let mut n = 0;
-    let mut m = mask;
-    while m != 0 {
-        keys[n] = m.trailing_zeros() as u64;
-        m &= m - 1;
-        n += 1;
-    }
-    n
 }
 
 /// The grid vertices `(x, y)` of half `h` of quad `(x, y)`: `[a, b, c]` or `[a, c, d]`.

@@ -201,6 +201,27 @@ pub fn front_to_back<const N: usize>(mask: u32, near: &[f32; N], keys: &mut [u64
     n
 }
 
+/// The children in `mask` as [`front_to_back`] keys: sorted with `ORDERED`, else in child
+/// order (any-hit queries, whose answer does not depend on the order).
+#[inline(always)]
+pub fn in_order<const ORDERED: bool, const N: usize>(
+    mask: u32,
+    near: &[f32; N],
+    keys: &mut [u64; N],
+) -> usize {
+    if ORDERED {
+        return front_to_back(mask, near, keys);
+    }
+    let mut n = 0;
+    let mut m = mask;
+    while m != 0 {
+        keys[n] = m.trailing_zeros() as u64;
+        m &= m - 1;
+        n += 1;
+    }
+    n
+}
+
 /// The child index of a [`front_to_back`] key.
 #[inline(always)]
 pub fn child_of(key: u64) -> usize {

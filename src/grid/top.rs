@@ -7,7 +7,7 @@
 //! the primitives' boxes, never taken from the builder), so the conservative box test of
 //! [`crate::bvh::triangle::PreparedRay::hits_box`] can never cull a primitive the ray meets.
 
-use super::node::{child_of, front_to_back, test8, Box8};
+use super::node::{child_of, in_order, test8, Box8};
 use crate::bvh::triangle::PreparedRay;
 use glam::Vec3A;
 use obvhs::bvh2::builder::build_bvh2;
@@ -281,30 +281,18 @@ impl Top {
                         }
                         continue;
                     }
-                    if !ORDERED {
-                        let mut rest = mask & (mask - 1);
-                        while rest != 0 {
-                            let c = rest.trailing_zeros() as usize;
-                            rest &= rest - 1;
-                            let child = n.child[c];
-                            if child & LEAF != 0 {
-                                prefetch(child & !LEAF);
-                            } else {
-                                prefetch_node(&self.nodes, child);
-                            }
-                            stack[len] = (child, d[c]);
-                            len += 1;
-                        }
-                        node = n.child[mask.trailing_zeros() as usize];
-                        if node & LEAF != 0 {
-                            prefetch(node & !LEAF);
-                        }
-                        continue;
-                    }
                     let mut keys = [0; 8];
-                    let count = front_to_back(mask, &d, &mut keys);
-                    // Push far to near; the nearest goes on now.
-                    for &k in keys[1..count].iter().rev() {
+                    let count = in_order::<ORDERED, 8>(mask, &d, &mut keys);
+                    // The first goes on now. The others are pushed far to near (the nearest
+                    // waiting is popped first), or unordered as they come (the highest is
+                    // popped first: measured faster than the lowest).
+                    let rest = &keys[1..count];
+                    for i in 0..rest.len() {
+                        let k = if ORDERED {
+                            rest[rest.len() - 1 - i]
+                        } else {
+                            rest[i]
+                        };
                         let c = child_of(k);
                         let child = n.child[c];
                         if child & LEAF != 0 {

@@ -108,7 +108,7 @@ impl PatchTable {
         (self.nodes.len() - 1) as u32
     }
 
-    /// Settles face `g` of `level` (whose vertices are numbered from `offset` among the
+    /// Settles face `g` of a level (whose vertices are numbered from `offset` among the
     /// table's refined vertices) into node `slot`, as [`decide`] found it (`rows`: its
     /// control points' combinations, one per point): a hole, a regular patch, a Stam patch, an
     /// end cap at the maximum level, or a face to refine further (returned).
