@@ -790,7 +790,7 @@ impl DomainCtx<'_> {
     }
 
     /// The interior points of domain `(f, k)` (the lattice of `pat`, `put(i, point)` for the
-    /// `i`-th), evaluated at once when the domain is one B-spline patch and undisplaced
+    /// `i`-th), evaluated at once when the surface is undisplaced and exact
     /// ([`PatchTable::eval_domain_lattice`]: the same bits as point by point); `false`, with
     /// nothing put, otherwise.
     fn lattice(

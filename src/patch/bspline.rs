@@ -161,6 +161,26 @@ pub fn eval_tensor(cp: &ControlGrid, bu: &Basis, bv: &Basis) -> PatchPoint {
     out
 }
 
+/// [`eval_tensor`]'s position and first derivatives alone, bit for bit (the same products
+/// summed in the same order).
+#[inline]
+pub fn eval_tensor_d1(cp: &ControlGrid, bu: &Basis, bv: &Basis) -> PointD1 {
+    let mut out = PointD1::default();
+    for j in 0..4 {
+        let mut r = [0.0; 3];
+        let mut ru = [0.0; 3];
+        for i in 0..4 {
+            let p = &cp[4 * j + i];
+            axpy(&mut r, bu.w[i], p);
+            axpy(&mut ru, bu.d1[i], p);
+        }
+        axpy(&mut out.p, bv.w[j], &r);
+        axpy(&mut out.dv, bv.d1[j], &r);
+        axpy(&mut out.du, bv.w[j], &ru);
+    }
+    out
+}
+
 /// A point of a patch with its first partial derivatives.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PointD1 {

@@ -62,7 +62,7 @@
 //! neighbourhood (the paper's condition); the other three edges and all other vertices of the
 //! neighbourhood are smooth and regular.
 
-use super::bspline::{self, Basis, ControlGrid, Mat4, PatchPoint, IDENTITY};
+use super::bspline::{self, Basis, ControlGrid, Mat4, PatchPoint, PointD1, IDENTITY};
 use crate::mesh::SHARPNESS_INFINITE;
 
 /// The smooth refinement matrix `R` of the half segment next to the crease (paper 000 §3):
@@ -360,10 +360,30 @@ pub fn eval_with(
     u: f64,
     v: f64,
 ) -> PatchPoint {
+    let (bu, bv) = bases(crease_edge, curve, u, v);
+    bspline::eval_tensor(cp, &bu, &bv)
+}
+
+/// [`eval_with`]'s position and first derivatives alone, the same bits.
+pub fn eval_with_d1(
+    cp: &ControlGrid,
+    crease_edge: usize,
+    curve: &CreaseCurve,
+    u: f64,
+    v: f64,
+) -> PointD1 {
+    let (bu, bv) = bases(crease_edge, curve, u, v);
+    bspline::eval_tensor_d1(cp, &bu, &bv)
+}
+
+/// The weights along `u` and along `v` at `(u, v)` of a patch whose crease (of `curve`) lies
+/// on edge `crease_edge`: the plain B-spline's where the sharpness is zero.
+#[inline]
+fn bases(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> (Basis, Basis) {
     assert!(crease_edge < 4, "crease edge {crease_edge} is not in 0..4");
     if curve.sharpness() == 0.0 {
         // No crease: exactly the plain patch.
-        return bspline::eval(cp, u, v);
+        return (Basis::at(u), Basis::at(v));
     }
     let t = crease_parameter(crease_edge, u, v);
     let mut across = curve.basis(t);
@@ -371,9 +391,9 @@ pub fn eval_with(
         across = across.reversed();
     }
     if across_is_v(crease_edge) {
-        bspline::eval_tensor(cp, &Basis::at(u), &across)
+        (Basis::at(u), across)
     } else {
-        bspline::eval_tensor(cp, &across, &Basis::at(v))
+        (across, Basis::at(v))
     }
 }
 

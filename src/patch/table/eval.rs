@@ -6,7 +6,8 @@ use super::{Patch, PatchKind, PatchTable, Sample};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::patch::bspline::{self, ControlGrid, PatchPoint, PointD1};
-use crate::patch::{single_crease, stam};
+use crate::patch::single_crease::{self, CreaseCurve};
+use crate::patch::stam;
 
 impl PatchTable {
     /// Evaluates the limit surface at `at`; errors when `at` is outside the domain or in a hole.
@@ -53,20 +54,64 @@ impl PatchTable {
         if self.quad_approx.is_some() {
             return self.eval(at).map(|s| d1(&s));
         }
-        let (patch, frame, s, t) = self.leaf(at)?;
-        if let PatchKind::BSpline { .. } = patch.kind {
-            return Ok(frame.face_point_d1(bspline::eval_d1(self.grid(patch.first_point), s, t)));
-        }
-        let (pt, local, _) = self.eval_patch(patch, s, t);
+        let (p, frame, s, t) = self.leaf_index(at)?;
+        Ok(self.leaf_d1(p, frame, s, t, &mut Recent::default()))
+    }
+
+    /// [`Self::eval_d1`] at `(s, t)` of leaf patch `p`, whose frame within its domain is
+    /// `frame`; Stam patches' sub-patches and single-crease patches' crease pieces from
+    /// `parts` (their own, whoever keeps them).
+    pub(super) fn leaf_d1(
+        &self,
+        p: u32,
+        frame: Frame,
+        s: f64,
+        t: f64,
+        parts: &mut impl LeafParts,
+    ) -> PointD1 {
+        let patch = &self.patches[p as usize];
+        let (pt, local) = match patch.kind {
+            PatchKind::BSpline { .. } => {
+                (bspline::eval_d1(self.grid(patch.first_point), s, t), None)
+            }
+            PatchKind::SingleCrease { edge, sharpness } => {
+                let curve = parts.curve(p, sharpness as f64);
+                let grid = self.grid(patch.first_point);
+                (
+                    single_crease::eval_with_d1(grid, edge as usize, curve, s, t),
+                    None,
+                )
+            }
+            PatchKind::EndCap => {
+                let (pt, _) = self.on_demand(&self.end_caps[patch.end_cap as usize], s, t);
+                let d1 = PointD1 {
+                    p: pt.p,
+                    du: pt.du,
+                    dv: pt.dv,
+                };
+                (d1, None)
+            }
+            PatchKind::Stam { valence, corner } => {
+                let basis = self.stam_basis(valence);
+                let first = patch.first_point as usize;
+                let cps = &self.points[first..first + basis.size];
+                let (rot, s1, t1) = stam_corner(corner, s, t);
+                let (pt, sub) = parts.stam(p, basis, cps, s1, t1);
+                (pt, Some(rot.then(&sub)))
+            }
+        };
         let frame = match local {
             Some(l) => frame.then(&l),
             None => frame,
         };
-        Ok(frame.face_point_d1(PointD1 {
-            p: pt.p,
-            du: pt.du,
-            dv: pt.dv,
-        }))
+        frame.face_point_d1(pt)
+    }
+
+    /// Stam's matrices of `valence`.
+    fn stam_basis(&self, valence: u8) -> &stam::StamBasis {
+        self.stam[valence as usize]
+            .as_ref()
+            .expect("the table holds the matrices of its Stam patches")
     }
 
     /// An error when `at` is outside the table's domains.
@@ -99,18 +144,25 @@ impl PatchTable {
     /// The leaf of the quadtree holding `at` (in range), its frame and `at` in the leaf's
     /// `(s, t)`; an error in a hole.
     fn leaf(&self, at: FaceCoord) -> Result<(&Patch, Frame, f64, f64)> {
+        let (p, frame, s, t) = self.leaf_index(at)?;
+        Ok((&self.patches[p as usize], frame, s, t))
+    }
+
+    /// [`Self::leaf`] with the patch's index.
+    fn leaf_index(&self, at: FaceCoord) -> Result<(u32, Frame, f64, f64)> {
+        self.find_leaf(at)
+            .ok_or_else(|| Error::new(ErrorKind::Usage, format!("face {} is a hole", at.face)))
+    }
+
+    /// [`Self::leaf_index`], `None` in a hole.
+    pub(super) fn find_leaf(&self, at: FaceCoord) -> Option<(u32, Frame, f64, f64)> {
         let (face, k) = (at.face as usize, at.k as usize);
         let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
         let mut frame = Frame::UNIT;
         let (mut s, mut t) = (at.u, at.v);
         loop {
             match node {
-                Node::Empty => {
-                    return Err(Error::new(
-                        ErrorKind::Usage,
-                        format!("face {face} is a hole"),
-                    ));
-                }
+                Node::Empty => return None,
                 Node::Inner(c) => {
                     let (q, s2, t2) = descend(s, t);
                     frame = frame.child(q);
@@ -118,7 +170,7 @@ impl PatchTable {
                     t = t2;
                     node = self.kids[c as usize][q];
                 }
-                Node::Leaf(p) => return Ok((&self.patches[p as usize], frame, s, t)),
+                Node::Leaf(p) => return Some((p, frame, s, t)),
             }
         }
     }
@@ -189,44 +241,11 @@ impl PatchTable {
 
     /// The patch of domain `(face, k)` when its quadtree is that one leaf (`face` and `k` in
     /// range).
-    fn root_patch(&self, face: usize, k: usize) -> Option<&Patch> {
+    pub(super) fn root_patch(&self, face: usize, k: usize) -> Option<&Patch> {
         match self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize] {
             Node::Leaf(p) => Some(&self.patches[p as usize]),
             _ => None,
         }
-    }
-
-    /// [`Self::eval`]'s position and first derivatives at the interior points of the lattice
-    /// `(i / nu, j / nv)` of domain `(face, k)`, `0 < i < nu`, `0 < j < nv`, row by row from
-    /// `j = 1`, when the whole domain is one B-spline patch of an exact table: the same bits
-    /// as [`Self::eval`] at a fraction of the cost ([`bspline::eval_lattice`]). Returns
-    /// `false`, evaluating nothing, for any other domain (or out of range).
-    pub fn eval_domain_lattice(
-        &self,
-        face: usize,
-        k: usize,
-        nu: u32,
-        nv: u32,
-        mut out: impl FnMut(PointD1),
-    ) -> bool {
-        if self.is_approximate()
-            || self.loop_surface.is_some()
-            || face >= self.num_faces()
-            || k >= self.sub_faces(face)
-        {
-            return false;
-        }
-        let Some(patch) = self.root_patch(face, k) else {
-            return false;
-        };
-        if !matches!(patch.kind, PatchKind::BSpline { .. }) {
-            return false;
-        }
-        bspline::eval_lattice(self.grid(patch.first_point), nu, nv, |pt| {
-            // The root's frame, as `eval` applies it (the identity up to the sign of zeros).
-            out(Frame::UNIT.face_point_d1(pt))
-        });
-        true
     }
 
     /// Evaluates many samples in parallel.
@@ -236,7 +255,7 @@ impl PatchTable {
     }
 
     /// The 16 control points from `first`, in place.
-    fn grid(&self, first: u32) -> &ControlGrid {
+    pub(super) fn grid(&self, first: u32) -> &ControlGrid {
         let first = first as usize;
         self.points[first..first + 16]
             .try_into()
@@ -266,9 +285,7 @@ impl PatchTable {
                 (pt, None, extra)
             }
             PatchKind::Stam { valence, corner } => {
-                let basis = self.stam[valence as usize]
-                    .as_ref()
-                    .expect("the table holds the matrices of its Stam patches");
+                let basis = self.stam_basis(valence);
                 let first = patch.first_point as usize;
                 let cps = &self.points[first..first + basis.size];
                 // The extraordinary vertex to (0, 0): (s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c].
@@ -277,6 +294,46 @@ impl PatchTable {
                 (pt, Some(rot.then(&sub)), depth)
             }
         }
+    }
+}
+
+/// Where [`PatchTable::leaf_d1`] gets the parts of a leaf that serve all its points: a
+/// Stam patch's regular sub-patches, a single-crease patch's crease pieces.
+pub(super) trait LeafParts {
+    /// The crease pieces of sharpness `sharpness` (of single-crease patch `p`).
+    fn curve(&mut self, p: u32, sharpness: f64) -> &CreaseCurve;
+    /// [`stam::StamBasis::eval_local_d1`] of Stam patch `p` (matrices `basis`, control
+    /// points `cps`) at local `(s, t)`.
+    fn stam(
+        &mut self,
+        p: u32,
+        basis: &stam::StamBasis,
+        cps: &[[f64; 3]],
+        s: f64,
+        t: f64,
+    ) -> (PointD1, Frame);
+}
+
+/// The parts of a single point's leaf: crease pieces built for it, Stam sub-patches from
+/// the per-thread cache of recent ones.
+#[derive(Default)]
+struct Recent {
+    curve: Option<CreaseCurve>,
+}
+
+impl LeafParts for Recent {
+    fn curve(&mut self, _: u32, sharpness: f64) -> &CreaseCurve {
+        self.curve.insert(CreaseCurve::new(sharpness))
+    }
+    fn stam(
+        &mut self,
+        _: u32,
+        basis: &stam::StamBasis,
+        cps: &[[f64; 3]],
+        s: f64,
+        t: f64,
+    ) -> (PointD1, Frame) {
+        basis.eval_local_d1_recent(cps, s, t)
     }
 }
 
@@ -297,19 +354,20 @@ fn stam_corner(corner: u8, s: f64, t: f64) -> (Frame, f64, f64) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use crate::coord::FaceCoord;
     use crate::harness::rng::SplitMix64;
     use crate::patch::{PatchOptions, PatchTable};
 
     /// Tables with B-spline, single-crease, Stam and end-cap leaves (extraordinary vertices,
-    /// semi-sharp creases, n-gons).
-    fn tables() -> Vec<PatchTable> {
+    /// semi-sharp creases, n-gons, and poles of valence 60, beyond Stam's tables).
+    pub(in crate::patch::table) fn tables() -> Vec<PatchTable> {
         [
             crate::mesh::shapes::rounded_box(2.0),
             crate::mesh::shapes::gear(7),
             crate::mesh::shapes::blob(),
             crate::mesh::generate::grid(6),
+            crate::mesh::shapes::spindle(60),
         ]
         .iter()
         .map(|mesh| PatchTable::new(mesh, PatchOptions::default()).unwrap())

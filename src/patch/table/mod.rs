@@ -16,11 +16,12 @@
 //!
 //! The module is split by concept: `tree` (the quadtree of nodes and their frames),
 //! `build` (the factory: classification and local refinement), `eval` (the lookup and
-//! evaluation of leaves) and `end_cap` (end caps and their on-demand subdivision).
+//! evaluation of leaves), `lattice` (a domain's lattice of points at once) and `end_cap` (end caps and their on-demand subdivision).
 
 mod build;
 mod end_cap;
 mod eval;
+mod lattice;
 pub mod loop_pieces;
 pub mod pieces;
 pub(crate) mod tree;

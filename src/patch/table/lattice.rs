@@ -1,0 +1,205 @@
+//! A domain's lattice of points evaluated at once: [`PatchTable::eval`]'s position and first
+//! derivatives at every interior point of `(i / nu, j / nv)`, the same bits as point by point,
+//! with what the points of a leaf share (a B-spline's contracted columns, a Stam patch's
+//! regular sub-patches, a single-crease patch's crease pieces) computed once per domain.
+
+use super::eval::LeafParts;
+use super::tree::Frame;
+use super::{PatchKind, PatchTable};
+use crate::coord::FaceCoord;
+use crate::patch::bspline::{self, ControlGrid, PointD1};
+use crate::patch::single_crease::CreaseCurve;
+use crate::patch::stam::StamBasis;
+
+impl PatchTable {
+    /// [`Self::eval_d1`] at the interior points of the lattice `(i / nu, j / nv)` of domain
+    /// `(face, k)`, `0 < i < nu`, `0 < j < nv`, row by row from `j = 1`: the same bits as
+    /// point by point at a fraction of the cost. A domain that is one B-spline patch contracts
+    /// each lattice column once ([`bspline::eval_lattice`]); any other domain looks each
+    /// point's leaf up and evaluates it with the leaf's shared parts kept for the domain.
+    /// Returns `false`, evaluating nothing, for an approximate or Loop table, a domain out of
+    /// range, or one with a hole at a lattice point (point-by-point evaluation names it).
+    pub fn eval_domain_lattice(
+        &self,
+        face: usize,
+        k: usize,
+        nu: u32,
+        nv: u32,
+        mut out: impl FnMut(PointD1),
+    ) -> bool {
+        if self.is_approximate()
+            || self.loop_surface.is_some()
+            || face >= self.num_faces()
+            || k >= self.sub_faces(face)
+        {
+            return false;
+        }
+        if let Some(patch) = self.root_patch(face, k) {
+            if let PatchKind::BSpline { .. } = patch.kind {
+                bspline::eval_lattice(self.grid(patch.first_point), nu, nv, |pt| {
+                    // The root's frame, as `eval` applies it (the identity up to the sign of
+                    // zeros).
+                    out(Frame::UNIT.face_point_d1(pt))
+                });
+                return true;
+            }
+        }
+        // Every point's leaf first: a hole anywhere leaves the domain to point-by-point
+        // evaluation, with nothing evaluated here.
+        let (face32, k32) = (face as u32, k as u32);
+        let mut leaves = Vec::with_capacity((nu.saturating_sub(1) * nv.saturating_sub(1)) as usize);
+        for j in 1..nv {
+            let v = j as f64 / nv as f64;
+            for i in 1..nu {
+                let at = FaceCoord::new(face32, k32, i as f64 / nu as f64, v);
+                match self.find_leaf(at) {
+                    Some(leaf) => leaves.push(leaf),
+                    None => return false,
+                }
+            }
+        }
+        let mut kept = Kept::default();
+        for (p, frame, s, t) in leaves {
+            out(self.leaf_d1(p, frame, s, t, &mut kept));
+        }
+        true
+    }
+}
+
+/// The shared parts of the leaves of one domain, kept while its points are evaluated (a
+/// domain has a few leaves: a linear search finds them).
+#[derive(Default)]
+struct Kept {
+    /// Crease pieces by single-crease patch.
+    curves: Vec<(u32, CreaseCurve)>,
+    /// Regular sub-patches by Stam patch, depth and quadrant.
+    grids: Vec<(u32, u8, u8, ControlGrid)>,
+}
+
+impl LeafParts for Kept {
+    fn curve(&mut self, p: u32, sharpness: f64) -> &CreaseCurve {
+        let i = match self.curves.iter().position(|(q, _)| *q == p) {
+            Some(i) => i,
+            None => {
+                self.curves.push((p, CreaseCurve::new(sharpness)));
+                self.curves.len() - 1
+            }
+        };
+        &self.curves[i].1
+    }
+
+    fn stam(
+        &mut self,
+        p: u32,
+        basis: &StamBasis,
+        cps: &[[f64; 3]],
+        s: f64,
+        t: f64,
+    ) -> (PointD1, Frame) {
+        let grids = &mut self.grids;
+        basis.eval_local_d1(cps, s, t, &mut |m, q| {
+            let key = (p, m as u8, q as u8);
+            if let Some(e) = grids.iter().find(|e| (e.0, e.1, e.2) == key) {
+                return e.3;
+            }
+            let grid = basis.grid(m, q, cps);
+            grids.push((p, m as u8, q as u8, grid));
+            grid
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::eval::tests::tables;
+    use super::super::tree::Node;
+    use super::super::PatchKind;
+    use crate::coord::FaceCoord;
+    use crate::mesh::MeshBuilder;
+    use crate::patch::{PatchOptions, PatchTable};
+
+    /// Every domain's lattice, at rates that put points on tree splits (even rates) and
+    /// off them (odd), equals `eval_d1` point by point bit for bit (signs of zeros included),
+    /// in the same order, on meshes with B-spline, single-crease, Stam and end-cap leaves
+    /// under trees.
+    #[test]
+    fn lattice_is_point_by_point_bit_for_bit() {
+        let bits = |p: [[f64; 3]; 3]| p.map(|v| v.map(f64::to_bits));
+        let mut kinds = [0usize; 4];
+        for table in tables() {
+            for f in 0..table.num_faces() {
+                for k in 0..table.sub_faces(f) {
+                    for (nu, nv) in [(2, 2), (5, 3), (8, 8), (16, 16), (7, 12)] {
+                        let mut got = Vec::new();
+                        let done = table.eval_domain_lattice(f, k, nu, nv, |pt| {
+                            got.push(bits([pt.p, pt.du, pt.dv]));
+                        });
+                        assert!(done, "domain ({f}, {k}) not evaluated");
+                        let mut want = Vec::new();
+                        for j in 1..nv {
+                            for i in 1..nu {
+                                let (u, v) = (i as f64 / nu as f64, j as f64 / nv as f64);
+                                let at = FaceCoord::new(f as u32, k as u32, u, v);
+                                let pt = table.eval_d1(at).unwrap();
+                                want.push(bits([pt.p, pt.du, pt.dv]));
+                            }
+                        }
+                        assert_eq!(got, want, "domain ({f}, {k}) at {nu} x {nv}");
+                    }
+                    // Which leaves the domain's tree holds (a B-spline root takes the
+                    // column path, every other domain the tree path).
+                    let root =
+                        table.nodes[table.roots[table.root_offsets[f] as usize + k] as usize];
+                    let mut stack = vec![root];
+                    while let Some(node) = stack.pop() {
+                        match node {
+                            Node::Inner(c) => stack.extend(table.kids[c as usize]),
+                            Node::Leaf(p) if !matches!(root, Node::Leaf(_)) => {
+                                kinds[match table.patches[p as usize].kind {
+                                    PatchKind::BSpline { .. } => 0,
+                                    PatchKind::SingleCrease { .. } => 1,
+                                    PatchKind::Stam { .. } => 2,
+                                    PatchKind::EndCap => 3,
+                                }] += 1;
+                            }
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            kinds.iter().all(|&n| n > 0),
+            "leaves under trees by kind: {kinds:?}"
+        );
+    }
+
+    /// A hole at a lattice point leaves the whole domain to point-by-point evaluation (which
+    /// names the hole), with nothing evaluated.
+    #[test]
+    fn a_hole_leaves_the_domain_to_points() {
+        let positions = (0..16)
+            .map(|i| [(i % 4) as f64, (i / 4) as f64, 0.0])
+            .collect();
+        let quads: Vec<u32> = (0..9)
+            .flat_map(|q| {
+                let v = 4 * (q / 3) + q % 3;
+                [v, v + 1, v + 5, v + 4]
+            })
+            .collect();
+        let mesh = MeshBuilder::new()
+            .positions(positions)
+            .faces(&[4; 9], &quads)
+            .hole(4)
+            .build()
+            .unwrap();
+        let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        let mut called = 0;
+        assert!(!table.eval_domain_lattice(4, 0, 4, 4, |_| called += 1));
+        assert_eq!(called, 0);
+        assert!(table.eval_d1(FaceCoord::new(4, 0, 0.5, 0.5)).is_err());
+        // Its neighbours are evaluated.
+        assert!(table.eval_domain_lattice(3, 0, 4, 4, |_| called += 1));
+        assert_eq!(called, 9);
+    }
+}
