@@ -1,9 +1,9 @@
 //! Criterion benchmark of the grid core's octahedral normal encoding
-//! ([`limitray::grid::block::oct_encode`]): 4096 random unit normals per iteration, as the
+//! ([`limitray::grid::oct::oct_encode`]): 4096 random unit normals per iteration, as the
 //! grid build encodes one per stored vertex. `cargo bench --bench encode` takes a few seconds.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use limitray::grid::block::oct_encode;
+use limitray::grid::oct::oct_encode;
 use limitray::harness::rng::SplitMix64;
 use std::hint::black_box;
 use std::time::Duration;

@@ -2,7 +2,7 @@
 //!
 //! Each diced domain's regular grid ([`crate::dice::GridRegion`]) is cut into blocks of at
 //! most 8×8 quads ([`block`]). A block stores its vertices once, as `f32` planes, with
-//! octahedral normals; its hierarchy is implicit (quadrants, then 2×2-quad windows, boxes in
+//! octahedral normals ([`oct`]); its hierarchy is implicit (quadrants, then 2×2-quad windows, boxes in
 //! [`node::Box4`]), and its leaf test runs on the eight triangles of a window at once
 //! ([`window`]). The triangles outside the grids (zippers between different rates, tiny
 //! domains) are *loose* triangles with their own records, grouped into strips of at most
@@ -21,6 +21,7 @@
 
 pub mod block;
 pub mod node;
+pub mod oct;
 pub mod top;
 pub mod window;
 
@@ -29,8 +30,9 @@ use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
-use block::{block_boxes, oct_decode, oct_encode, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
+use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
+use oct::{oct_decode, oct_encode};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
