@@ -1,9 +1,10 @@
 //! Criterion benchmark of the grid core's octahedral normal encoding
-//! ([`limitray::grid::oct::oct_encode`]): 4096 random unit normals per iteration, as the
-//! grid build encodes one per stored vertex. `cargo bench --bench encode` takes a few seconds.
+//! ([`limitray::grid::oct::oct_encode`] one by one, and [`limitray::grid::oct::oct_encode_all`]
+//! as the grid build calls it): 4096 random unit normals per iteration, as the grid build
+//! encodes one per stored vertex. `cargo bench --bench encode` takes a few seconds.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use limitray::grid::oct::oct_encode;
+use limitray::grid::oct::{oct_encode, oct_encode_all};
 use limitray::harness::rng::SplitMix64;
 use std::hint::black_box;
 use std::time::Duration;
@@ -31,6 +32,13 @@ fn encode(c: &mut Criterion) {
                 acc ^= oct_encode(n);
             }
             acc
+        })
+    });
+    group.bench_function("random_unit_batch", |b| {
+        let mut codes = vec![0u32; NORMALS];
+        b.iter(|| {
+            oct_encode_all(black_box(&normals), &mut codes);
+            codes[NORMALS - 1]
         })
     });
     group.finish();

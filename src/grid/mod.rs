@@ -32,7 +32,7 @@ use crate::dice::{DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
-use oct::{oct_decode, oct_encode};
+use oct::{oct_decode, oct_encode_all};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
@@ -300,12 +300,11 @@ impl GridMesh {
             .collect();
         // Each vertex's octahedral normal, encoded once (a block border's vertices are held by
         // two or four blocks, a loose triangle's corners by several triangles).
-        let codes: Vec<u32> = d
-            .normals
-            .par_iter()
-            .with_min_len(4096)
-            .map(|&n| oct_encode(n))
-            .collect();
+        let mut codes = vec![0u32; d.normals.len()];
+        codes
+            .par_chunks_mut(4096)
+            .zip(d.normals.par_chunks(4096))
+            .for_each(|(c, n)| oct_encode_all(n, c));
         let mut m = GridMesh {
             triangles: d.triangles.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],

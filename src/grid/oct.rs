@@ -28,6 +28,98 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
     oct_best(n, [qx, qx1], [qy, qy1])
 }
 
+/// Normals encoded side by side by [`oct_encode_all`].
+const LANES: usize = 8;
+
+/// [`oct_encode`] of every normal of `normals` into `codes` (of the same length): the same
+/// codes, [`LANES`] normals side by side in lanes the compiler vectorises (AVX2 where
+/// detected), the rest one by one.
+pub fn oct_encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
+    assert_eq!(normals.len(), codes.len(), "one code per normal");
+    #[cfg(target_arch = "x86_64")]
+    if super::window::has_avx2() {
+        // SAFETY: AVX2 is present (detected).
+        return unsafe { encode_all_avx2(normals, codes) };
+    }
+    encode_all(normals, codes)
+}
+
+/// [`encode_all`] compiled for AVX2.
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn encode_all_avx2(normals: &[[f32; 3]], codes: &mut [u32]) {
+    encode_all(normals, codes)
+}
+
+/// [`oct_encode_all`] for whatever instructions the caller was compiled for.
+#[inline(always)]
+fn encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
+    let mut n = normals.chunks_exact(LANES);
+    let mut c = codes.chunks_exact_mut(LANES);
+    for (n, c) in (&mut n).zip(&mut c) {
+        c.copy_from_slice(&encode_lanes(n.try_into().expect("a chunk of LANES")));
+    }
+    for (n, c) in n.remainder().iter().zip(c.into_remainder()) {
+        *c = oct_encode(*n);
+    }
+}
+
+/// [`oct_encode`] of [`LANES`] normals, lane by lane the same operations in the same order
+/// (no FMA), with selects for its branches: the code of an invalid normal is that of `+z`,
+/// so `+z` is encoded in its place.
+#[inline(always)]
+fn encode_lanes(n: &[[f32; 3]; LANES]) -> [u32; LANES] {
+    let (mut nx, mut ny, mut nz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
+    for i in 0..LANES {
+        let l1 = n[i][0].abs() + n[i][1].abs() + n[i][2].abs();
+        let ok = l1 > 0.0 && l1.is_finite();
+        nx[i] = if ok { n[i][0] } else { 0.0 };
+        ny[i] = if ok { n[i][1] } else { 0.0 };
+        nz[i] = if ok { n[i][2] } else { 1.0 };
+    }
+    let (mut qx, mut qy) = ([0u32; LANES], [0u32; LANES]);
+    for i in 0..LANES {
+        let l1 = nx[i].abs() + ny[i].abs() + nz[i].abs();
+        let (x, y) = (nx[i] / l1, ny[i] / l1);
+        let (ax, ay) = (x.abs(), y.abs());
+        let fx = (1.0 - ay) * if x >= 0.0 { 1.0 } else { -1.0 };
+        let fy = (1.0 - ax) * if y >= 0.0 { 1.0 } else { -1.0 };
+        let lower = nz[i] < 0.0;
+        let (x, y) = (if lower { fx } else { x }, if lower { fy } else { y });
+        // SAFETY: `x` and `y` are finite (`l1` is finite and positive, so every coordinate
+        // is finite), so the clamped value lies in [0, 65535], where the unchecked
+        // truncation is `oct_encode`'s saturating cast to `u32` (and vectorises).
+        let q = |v: f32| unsafe {
+            ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).to_int_unchecked::<i32>() as u32
+        };
+        qx[i] = q(x);
+        qy[i] = q(y);
+    }
+    let mut best_num = [f64::NEG_INFINITY; LANES];
+    let mut best_len2 = [1.0f64; LANES];
+    let mut best = [0u32; LANES];
+    // The candidates in `oct_best`'s order: `dx` within `dy`.
+    for c in 0..4u32 {
+        for i in 0..LANES {
+            let cx = (qx[i] + c % 2).min(65535);
+            let cy = (qy[i] + c / 2).min(65535);
+            let w = oct_fold(oct_coord(cx), oct_coord(cy)).map(f64::from);
+            let nd = [nx[i], ny[i], nz[i]].map(f64::from);
+            let dot = w[0] * nd[0] + w[1] * nd[1] + w[2] * nd[2];
+            let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+            let num = dot * dot.abs();
+            let better = num * best_len2[i] > best_num[i] * len2;
+            best_num[i] = if better { num } else { best_num[i] };
+            best_len2[i] = if better { len2 } else { best_len2[i] };
+            best[i] = if better { cx | cy << 16 } else { best[i] };
+        }
+    }
+    best
+}
+
 /// The code among `(qx[dx], qy[dy])` (in the order `dy`, then `dx`) whose decoded direction
 /// is nearest `n`: the largest cosine, in `f64` (`1 − cos` of these angles is below `f32`'s
 /// resolution), of the direction before its normalisation, so no square root per candidate:
@@ -220,6 +312,39 @@ mod tests {
             }
         }
         best
+    }
+
+    /// The batch encoder gives every normal `oct_encode`'s code, on both instruction paths,
+    /// whatever the length (whole chunks of lanes and a remainder), invalid normals included.
+    #[test]
+    fn batch_encoder_equals_one_by_one() {
+        let mut rng = SplitMix64(29);
+        let mut normals = vec![
+            [0.0, 0.0, 0.0],
+            [f32::NAN, 0.0, 1.0],
+            [f32::INFINITY, 0.0, 0.0],
+            [-0.0, -0.0, -1.0],
+            [0.6, -0.8, -0.0],
+            [0.0, 0.0, -1.0],
+            [1e-30, -1e-30, 1e-30],
+        ];
+        for _ in 0..100_003 {
+            let v = [(); 3].map(|_| rng.next_f64() as f32 * 2.0 - 1.0);
+            normals.push(match rng.below(4) {
+                0 => [v[0], v[1], 0.0],
+                1 => [v[0], 0.0, v[2]],
+                _ => v,
+            });
+        }
+        let want: Vec<u32> = normals.iter().map(|&n| oct_encode(n)).collect();
+        for len in [0, 5, 8, 13, normals.len()] {
+            let mut codes = vec![0; len];
+            oct_encode_all(&normals[..len], &mut codes);
+            assert_eq!(codes, want[..len], "dispatched, {len} normals");
+            let mut codes = vec![0; len];
+            encode_all(&normals[..len], &mut codes);
+            assert_eq!(codes, want[..len], "baseline instructions, {len} normals");
+        }
     }
 
     #[test]
