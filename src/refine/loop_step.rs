@@ -133,7 +133,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
     let halves = edge_halves(parent, method);
     let (edge_sharpness, vertex_sharpness) = child_tags(parent, &halves, &child_topo);
 
-    let mut table = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
+    let vertex_rows = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
     let edge_rows = parallel_rows(ne, nv, |e, acc| {
         let [a, b] = topo.edge_verts[e];
         let opp: Vec<u32> = topo
@@ -151,7 +151,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             crease::is_sharp(h0) && crease::is_sharp(h1),
         );
     });
-    table.append(&edge_rows);
+    let table = StencilTable::concat(vertex_rows.num_inputs, [&vertex_rows, &edge_rows]);
 
     (
         Level {

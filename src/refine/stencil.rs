@@ -97,6 +97,22 @@ impl StencilTable {
             .extend(other.offsets[1..].iter().map(|&o| o + base));
     }
 
+    /// The rows of `parts` one after another, in one allocation per array.
+    pub fn concat<'a>(
+        num_inputs: usize,
+        parts: impl IntoIterator<Item = &'a StencilTable> + Clone,
+    ) -> Self {
+        let mut table = StencilTable::new(num_inputs);
+        table.reserve(
+            parts.clone().into_iter().map(|p| p.len()).sum(),
+            parts.clone().into_iter().map(|p| p.indices.len()).sum(),
+        );
+        for p in parts {
+            table.append(p);
+        }
+        table
+    }
+
     /// Reserves room for `rows` more rows of `terms` terms in all.
     pub fn reserve(&mut self, rows: usize, terms: usize) {
         self.offsets.reserve(rows);

@@ -80,11 +80,7 @@ where
             t
         })
         .collect();
-    let mut table = StencilTable::new(num_inputs);
-    for p in &parts {
-        table.append(p);
-    }
-    table
+    StencilTable::concat(num_inputs, &parts)
 }
 
 /// The child edge (numbered `2e`, `2e + 1` as in [`refine`]) of parent edge `e` that touches
@@ -275,9 +271,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             parent.smooth_triangles,
         );
     });
-    let mut table = vertex_rows;
-    table.append(&face_rows);
-    table.append(&edge_rows);
+    let table = StencilTable::concat(nv, [&vertex_rows, &face_rows, &edge_rows]);
 
     (
         Level {
