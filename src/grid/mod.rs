@@ -20,6 +20,7 @@
 //! order as this walk, and `tests/gpu.rs` checks that they agree bit for bit, ties included.
 
 pub mod block;
+pub mod collapse;
 pub mod node;
 pub mod oct;
 pub mod top;

@@ -1,5 +1,6 @@
 //! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from obvhs's
-//! binary PLOC build, with exact `f32` child boxes ([`Box8`]) and an ordered, distance-culled
+//! binary PLOC build (the collapse of least total node area, [`super::collapse`]), with
+//! exact `f32` child boxes ([`Box8`]) and an ordered, distance-culled
 //! stack traversal. Eight children per node halve the levels a ray walks against a 4-wide
 //! tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
 //!
@@ -7,11 +8,13 @@
 //! the primitives' boxes, never taken from the builder), so the conservative box test of
 //! [`crate::bvh::triangle::PreparedRay::hits_box`] can never cull a primitive the ray meets.
 
+use super::collapse::Collapse;
 use super::node::{child_of, in_order, test8, Box8};
 use crate::bvh::triangle::PreparedRay;
 use glam::Vec3A;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
+use std::mem::MaybeUninit;
 
 /// A child reference: a node index, or a primitive with [`LEAF`] set; [`EMPTY`] for none.
 pub type Ref = u32;
@@ -66,14 +69,6 @@ impl Boundable for PrimBox {
     }
 }
 
-fn area(b: &Aabb) -> f32 {
-    let d = b.max - b.min;
-    if d.x < 0.0 {
-        return 0.0;
-    }
-    d.x * d.y + d.y * d.z + d.z * d.x
-}
-
 type Bounds = [[f32; 3]; 2];
 
 fn union(a: Bounds, b: Bounds) -> Bounds {
@@ -121,7 +116,8 @@ impl Top {
             depth: 0,
             stack: 0,
         };
-        // Iterative collapse: each entry is a binary node to become an 8-wide node at `slot`.
+        // The collapse: each entry is a binary node to become an 8-wide node at `slot`.
+        let collapse = Collapse::new(&bvh2);
         let leaf_ref = |n: usize, out: &mut Vec<Ref>| {
             let node = &bvh2.nodes[n];
             for i in 0..node.prim_count {
@@ -132,29 +128,7 @@ impl Top {
         top.nodes.push(Node8::EMPTY);
         while let Some((bin, slot, level)) = work.pop() {
             top.depth = top.depth.max(level);
-            // Open the largest inner child until eight children.
-            let mut kids: Vec<usize> = if bvh2.nodes[bin].is_leaf() {
-                vec![bin]
-            } else {
-                let l = bvh2.nodes[bin].first_index as usize;
-                vec![l, l + 1]
-            };
-            while kids.len() < WIDTH {
-                let Some((i, _)) = kids
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &k)| !bvh2.nodes[k].is_leaf())
-                    .max_by(|a, b| {
-                        area(bvh2.nodes[*a.1].aabb()).total_cmp(&area(bvh2.nodes[*b.1].aabb()))
-                    })
-                else {
-                    break;
-                };
-                let k = kids.swap_remove(i);
-                let l = bvh2.nodes[k].first_index as usize;
-                kids.push(l);
-                kids.push(l + 1);
-            }
+            let kids = collapse.children(bin);
             let mut refs: Vec<Ref> = Vec::with_capacity(WIDTH);
             for &k in &kids {
                 if bvh2.nodes[k].is_leaf() {
@@ -252,12 +226,14 @@ impl Top {
         if self.root == EMPTY || r.tmin > tmax {
             return;
         }
-        let mut fixed = [(0 as Ref, 0f32); FIXED_STACK];
+        // Not initialised (a fixed array of zeros would be cleared for every ray): an entry
+        // is read only below `len`, after it was written.
+        let mut fixed = [const { MaybeUninit::<(Ref, f32)>::uninit() }; FIXED_STACK];
         let mut heap = Vec::new();
-        let stack: &mut [(Ref, f32)] = if self.stack <= FIXED_STACK {
+        let stack: &mut [MaybeUninit<(Ref, f32)>] = if self.stack <= FIXED_STACK {
             &mut fixed
         } else {
-            heap.resize(self.stack, (0, 0.0));
+            heap.resize(self.stack, MaybeUninit::uninit());
             &mut heap
         };
         let mut len = 0;
@@ -300,7 +276,7 @@ impl Top {
                         } else {
                             prefetch_node(&self.nodes, child);
                         }
-                        stack[len] = (child, d[c]);
+                        stack[len].write((child, d[c]));
                         len += 1;
                     }
                     node = n.child[child_of(keys[0])];
@@ -316,7 +292,8 @@ impl Top {
                     return;
                 }
                 len -= 1;
-                let (next, near) = stack[len];
+                // SAFETY: every entry below the length was written when pushed.
+                let (next, near) = unsafe { stack[len].assume_init() };
                 if near > tmax {
                     continue;
                 }
@@ -328,7 +305,7 @@ impl Top {
 }
 
 /// Entries of the walk's stack held in a fixed array (deeper hierarchies use the heap).
-const FIXED_STACK: usize = 64;
+const FIXED_STACK: usize = 128;
 
 #[inline(always)]
 fn prefetch_node(nodes: &[Node8], i: u32) {

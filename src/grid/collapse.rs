@@ -1,0 +1,225 @@
+//! The collapse of a binary BVH into an 8-wide one that minimises the surface area heuristic:
+//! which binary nodes become 8-wide nodes, and which children each of them holds.
+//!
+//! Every primitive sits in a slot of some 8-wide node whatever the collapse, so its own cost
+//! (its area times the cost of testing it) is the same in every tree; what the collapse
+//! changes is the set of nodes, each costing a ray that reaches it one 8-wide box test.
+//! The expected cost of a tree is therefore, up to a constant, the sum of its nodes' areas,
+//! and the best tree is found by dynamic programming over the binary tree, bottom up:
+//! `cost(n, i)` is the least cost of the subtree of `n` given `i` slots of its parent
+//! (`1 ≤ i ≤ 8`). A leaf takes one slot at no cost. An inner node either becomes a node
+//! itself (one slot; its area plus the best spread of its two children over eight slots)
+//! or gives its slots to its two children, `j` to the first and `i − j` to the second.
+//! `cost(n, i)` does not grow with `i`, so a spread over `i` slots never needs fewer.
+
+use obvhs::bvh2::Bvh2;
+
+/// Slots of a node.
+const SLOTS: usize = 8;
+
+/// The optimal collapse of a binary BVH whose leaves hold one primitive each.
+pub struct Collapse<'a> {
+    bvh2: &'a Bvh2,
+    /// Per binary node and slot count `i` (index `i − 1`): how many of the slots its first
+    /// child gets when the node gives its slots away, or 0 when it takes one slot itself.
+    split: Vec<[u8; SLOTS]>,
+    /// Per binary inner node: how many of a new node's eight slots its first child gets.
+    spread: Vec<u8>,
+}
+
+impl<'a> Collapse<'a> {
+    /// Plans the collapse of `bvh2` (not empty).
+    pub fn new(bvh2: &'a Bvh2) -> Self {
+        let n = bvh2.nodes.len();
+        let mut cost = vec![[0f32; SLOTS]; n];
+        let mut split = vec![[0u8; SLOTS]; n];
+        let mut spread = vec![0u8; n];
+        // Children after their parent in a depth-first order: its reverse sees them first.
+        let mut order = Vec::with_capacity(n);
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            order.push(i);
+            let node = &bvh2.nodes[i];
+            if node.prim_count == 0 {
+                let first = node.first_index as usize;
+                stack.extend([first, first + 1]);
+            }
+        }
+        for &i in order.iter().rev() {
+            let node = &bvh2.nodes[i];
+            if node.prim_count != 0 {
+                continue; // A leaf: one slot, no cost (the zeros already there).
+            }
+            let (l, r) = (node.first_index as usize, node.first_index as usize + 1);
+            // The best spread of the two children over `s` slots, for s = 2..=8.
+            let mut open = [(f32::INFINITY, 0u8); SLOTS];
+            for s in 2..=SLOTS {
+                for j in 1..s {
+                    let c = cost[l][j - 1] + cost[r][s - j - 1];
+                    if c < open[s - 1].0 {
+                        open[s - 1] = (c, j as u8);
+                    }
+                }
+            }
+            let own = area(node.aabb()) + open[SLOTS - 1].0;
+            spread[i] = open[SLOTS - 1].1;
+            cost[i][0] = own;
+            for s in 2..=SLOTS {
+                let (c, j) = open[s - 1];
+                (cost[i][s - 1], split[i][s - 1]) = if c < own { (c, j) } else { (own, 0) };
+            }
+        }
+        Collapse {
+            bvh2,
+            split,
+            spread,
+        }
+    }
+
+    /// The children of the 8-wide node made from binary node `n`: binary nodes that are
+    /// leaves (primitives) or nodes of their own, at most eight. A leaf `n` is its own one
+    /// child.
+    pub fn children(&self, n: usize) -> Vec<usize> {
+        let node = &self.bvh2.nodes[n];
+        let mut out = Vec::with_capacity(SLOTS);
+        if node.prim_count != 0 {
+            out.push(n);
+            return out;
+        }
+        let first = node.first_index as usize;
+        let j = self.spread[n] as usize;
+        self.fill(first, j, &mut out);
+        self.fill(first + 1, SLOTS - j, &mut out);
+        out
+    }
+
+    /// Fills `slots` slots with the subtree of binary node `n`.
+    fn fill(&self, n: usize, slots: usize, out: &mut Vec<usize>) {
+        let j = self.split[n][slots - 1] as usize;
+        if j == 0 {
+            out.push(n);
+        } else {
+            let first = self.bvh2.nodes[n].first_index as usize;
+            self.fill(first, j, out);
+            self.fill(first + 1, slots - j, out);
+        }
+    }
+}
+
+/// Surface area (half of it) of a box; zero when empty.
+fn area(b: &obvhs::aabb::Aabb) -> f32 {
+    let d = b.max - b.min;
+    if d.x < 0.0 {
+        return 0.0;
+    }
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::harness::rng::SplitMix64;
+    use glam::Vec3A;
+    use obvhs::aabb::Aabb;
+    use obvhs::bvh2::builder::build_bvh2;
+    use obvhs::BvhBuildParams;
+
+    /// The binary nodes made 8-wide nodes by the collapse, from the root down.
+    fn made(c: &Collapse, root: usize) -> Vec<usize> {
+        let mut out = vec![root];
+        let mut i = 0;
+        while i < out.len() {
+            let n = out[i];
+            for k in c.children(n) {
+                assert_ne!(k, n, "an inner node is not its own child");
+                if c.bvh2.nodes[k].prim_count == 0 {
+                    out.push(k);
+                }
+            }
+            i += 1;
+        }
+        out
+    }
+
+    /// The least sum of node areas over every valid collapse, by trying every set of inner
+    /// binary nodes (the root always in) as the 8-wide nodes: valid when each such node's
+    /// children (the nearest chosen nodes or leaves below it) number at most eight.
+    fn brute_force(bvh2: &Bvh2) -> f32 {
+        let inner: Vec<usize> = (0..bvh2.nodes.len())
+            .filter(|&n| n != 0 && bvh2.nodes[n].prim_count == 0)
+            .collect();
+        let mut best = f32::INFINITY;
+        for set in 0u64..1 << inner.len() {
+            let chosen = |n: usize| {
+                n == 0
+                    || inner
+                        .iter()
+                        .position(|&m| m == n)
+                        .is_some_and(|i| set >> i & 1 == 1)
+            };
+            // Children of a chosen node: descend through unchosen inner nodes.
+            let count = |n: usize| {
+                let mut stack = vec![
+                    bvh2.nodes[n].first_index as usize,
+                    bvh2.nodes[n].first_index as usize + 1,
+                ];
+                let mut kids = 0;
+                while let Some(k) = stack.pop() {
+                    if bvh2.nodes[k].prim_count != 0 || chosen(k) {
+                        kids += 1;
+                    } else {
+                        let f = bvh2.nodes[k].first_index as usize;
+                        stack.extend([f, f + 1]);
+                    }
+                }
+                kids
+            };
+            let nodes: Vec<usize> = std::iter::once(0)
+                .chain(inner.iter().copied().filter(|&n| chosen(n)))
+                .collect();
+            if nodes.iter().all(|&n| count(n) <= SLOTS) {
+                best = best.min(nodes.iter().map(|&n| area(bvh2.nodes[n].aabb())).sum());
+            }
+        }
+        best
+    }
+
+    /// On random scenes small enough to try every collapse, the planned one is valid (at
+    /// most eight children per node, every primitive once) and its sum of node areas is the
+    /// least there is (to `f32` rounding of the sums, 1e-5 relative).
+    #[test]
+    fn collapse_is_optimal() {
+        let mut rng = SplitMix64(40);
+        for case in 0..60 {
+            let count = 9 + case % 8;
+            let boxes: Vec<Aabb> = (0..count)
+                .map(|_| {
+                    let c = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 10.0));
+                    let e = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 2.0));
+                    Aabb::new(c, c + e)
+                })
+                .collect();
+            let mut params = BvhBuildParams::medium_build();
+            params.pre_split = false;
+            params.max_prims_per_leaf = 1;
+            let bvh2 = build_bvh2(&boxes, params, &mut std::time::Duration::default());
+            let c = Collapse::new(&bvh2);
+            let nodes = made(&c, 0);
+            let mut prims: Vec<usize> = Vec::new();
+            for &n in &nodes {
+                let kids = c.children(n);
+                assert!(kids.len() <= SLOTS);
+                prims.extend(kids.iter().filter(|&&k| bvh2.nodes[k].prim_count != 0));
+            }
+            prims.sort_unstable();
+            assert_eq!(prims.len(), count, "every primitive once");
+            assert!(
+                prims.windows(2).all(|w| w[0] < w[1]),
+                "every primitive once"
+            );
+            let got: f32 = nodes.iter().map(|&n| area(bvh2.nodes[n].aabb())).sum();
+            let want = brute_force(&bvh2);
+            assert!(got <= want * (1.0 + 1e-5), "case {case}: {got} > {want}");
+        }
+    }
+}
