@@ -33,7 +33,7 @@ use crate::mesh::ControlMesh;
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
-use crate::vec3::{cross, norm, sub};
+use crate::vec3::{cross, dot, norm, sub};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap as HashMap;
 
@@ -299,8 +299,12 @@ fn limit_frame(table: &PatchTable, at: FaceCoord) -> Result<(crate::patch::Sampl
 /// little inside the domain.
 fn unit_normal(table: &PatchTable, at: FaceCoord, du: [f64; 3], dv: [f64; 3]) -> Result<[f64; 3]> {
     let mut n = cross(du, dv);
-    let scale = norm(du) * norm(dv);
-    if norm(n).is_nan() || norm(n) <= 1e-10 * scale {
+    // `|n| > 1e-10 |du| |dv|` for sure, without the two square roots, when the squares clear
+    // it by a relative 1e-12 (rounding moves either side by a few 1e-16) in the normal range;
+    // otherwise the test as stated decides.
+    let (n2, bound) = (dot(n, n), 1e-20 * dot(du, du) * dot(dv, dv));
+    let clear = bound.is_normal() && n2.is_normal() && n2 > bound * (1.0 + 1e-12);
+    if !clear && (norm(n).is_nan() || norm(n) <= 1e-10 * (norm(du) * norm(dv))) {
         let (u2, v2) = (at.u + (0.5 - at.u) * 1e-4, at.v + (0.5 - at.v) * 1e-4);
         let s2 = table.eval_d1(FaceCoord::new(at.face, at.k, u2, v2))?;
         n = cross(s2.du, s2.dv);

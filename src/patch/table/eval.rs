@@ -156,6 +156,13 @@ impl PatchTable {
 
     /// [`Self::leaf_index`], `None` in a hole.
     pub(super) fn find_leaf(&self, at: FaceCoord) -> Option<(u32, Frame, f64, f64)> {
+        self.descend_to_leaf::<true>(at)
+    }
+
+    /// [`Self::find_leaf`], the frame followed down only with `FRAME` (the unit frame is
+    /// returned otherwise).
+    #[inline(always)]
+    fn descend_to_leaf<const FRAME: bool>(&self, at: FaceCoord) -> Option<(u32, Frame, f64, f64)> {
         let (face, k) = (at.face as usize, at.k as usize);
         let mut node = self.nodes[self.roots[self.root_offsets[face] as usize + k] as usize];
         let mut frame = Frame::UNIT;
@@ -165,7 +172,9 @@ impl PatchTable {
                 Node::Empty => return None,
                 Node::Inner(c) => {
                     let (q, s2, t2) = descend(s, t);
-                    frame = frame.child(q);
+                    if FRAME {
+                        frame = frame.child(q);
+                    }
                     s = s2;
                     t = t2;
                     node = self.kids[c as usize][q];
@@ -202,7 +211,12 @@ impl PatchTable {
         if let Some(surface) = &self.loop_surface {
             return surface.level_sub_quad(at);
         }
-        if let Ok((patch, _, s, t)) = self.check(at).and_then(|_| self.leaf(at)) {
+        let leaf = self
+            .check(at)
+            .ok()
+            .and_then(|_| self.descend_to_leaf::<false>(at));
+        if let Some((p, _, s, t)) = leaf {
+            let patch = &self.patches[p as usize];
             match patch.kind {
                 PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. } => {
                     return Ok(patch.level);
