@@ -32,7 +32,6 @@ pub mod exact;
 pub mod gpu;
 pub mod grid;
 pub mod harness;
-pub mod huge_pages;
 pub mod io;
 pub mod lines;
 pub mod memory;
