@@ -165,18 +165,26 @@ pub fn eval_tensor(cp: &ControlGrid, bu: &Basis, bv: &Basis) -> PatchPoint {
 /// summed in the same order).
 #[inline]
 pub fn eval_tensor_d1(cp: &ControlGrid, bu: &Basis, bv: &Basis) -> PointD1 {
+    tensor_d1(cp, [&bu.w, &bu.d1], [&bv.w, &bv.d1])
+}
+
+/// Position and first derivatives of `cp` with weights and first-derivative weights `u`
+/// along `u` (columns `i`) and `v` along `v` (rows `j`): each row contracted along `u` first,
+/// as [`eval_tensor`] sums.
+#[inline(always)]
+fn tensor_d1(cp: &ControlGrid, u: [&[f64; 4]; 2], v: [&[f64; 4]; 2]) -> PointD1 {
     let mut out = PointD1::default();
     for j in 0..4 {
         let mut r = [0.0; 3];
         let mut ru = [0.0; 3];
         for i in 0..4 {
             let p = &cp[4 * j + i];
-            axpy(&mut r, bu.w[i], p);
-            axpy(&mut ru, bu.d1[i], p);
+            axpy(&mut r, u[0][i], p);
+            axpy(&mut ru, u[1][i], p);
         }
-        axpy(&mut out.p, bv.w[j], &r);
-        axpy(&mut out.dv, bv.d1[j], &r);
-        axpy(&mut out.du, bv.w[j], &ru);
+        axpy(&mut out.p, v[0][j], &r);
+        axpy(&mut out.dv, v[1][j], &r);
+        axpy(&mut out.du, v[0][j], &ru);
     }
     out
 }
@@ -247,20 +255,7 @@ pub fn eval(cp: &ControlGrid, u: f64, v: f64) -> PatchPoint {
 pub fn eval_d1(cp: &ControlGrid, u: f64, v: f64) -> PointD1 {
     let (wu, du) = (basis(u), basis_d1(u));
     let (wv, dv) = (basis(v), basis_d1(v));
-    let mut out = PointD1::default();
-    for j in 0..4 {
-        let mut r = [0.0; 3];
-        let mut ru = [0.0; 3];
-        for i in 0..4 {
-            let p = &cp[4 * j + i];
-            axpy(&mut r, wu[i], p);
-            axpy(&mut ru, du[i], p);
-        }
-        axpy(&mut out.p, wv[j], &r);
-        axpy(&mut out.dv, dv[j], &r);
-        axpy(&mut out.du, wv[j], &ru);
-    }
-    out
+    tensor_d1(cp, [&wu, &du], [&wv, &dv])
 }
 
 #[cfg(test)]
