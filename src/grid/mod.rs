@@ -2,12 +2,12 @@
 //!
 //! Each diced domain's regular grid ([`crate::dice::GridRegion`]) is cut into blocks of at
 //! most 8×8 quads ([`block`]). A block stores its vertices once, as `f32` planes, with
-//! octahedral normals ([`oct`]); its hierarchy is implicit (quadrants, then 2×2-quad windows, boxes in
-//! [`node::Box4`]), and its leaf test runs on the eight triangles of a window at once
-//! ([`window`]). The triangles outside the grids (zippers between different rates, tiny
-//! domains) are *loose* triangles with their own records, grouped into strips of at most
-//! [`STRIP`] consecutive triangles of one domain. An 8-wide BVH over blocks and strips is the
-//! top level ([`top`]), its boxes exact.
+//! octahedral normals ([`oct`]); its hierarchy is implicit (quadrants, then 2×2-quad
+//! windows, boxes in [`node::Box4`]), and its leaf test runs on the eight triangles of a
+//! window at once ([`window`]). The triangles outside the grids (zippers between different
+//! rates, tiny domains) are *loose* triangles with their own records, grouped into strips of
+//! at most [`STRIP`] consecutive triangles of one domain. An 8-wide BVH over blocks and
+//! strips is the top level ([`top`], collapsed by [`collapse`]), its boxes exact.
 //!
 //! The vertices are the diced mesh's `f32` points, copied bit for bit: a vertex on a shared
 //! edge has the same bits in every block and loose triangle that holds it, and every triangle

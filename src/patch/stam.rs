@@ -381,26 +381,8 @@ impl StamBasis {
     /// and that sub-patch's frame within the patch (so that a caller can compose frames and
     /// convert derivatives once).
     pub(crate) fn eval_local(&self, cps: &[[f64; 3]], s: f64, t: f64) -> (PatchPoint, Frame, u8) {
-        debug_assert_eq!(cps.len(), self.size);
-        if s == 0.0 && t == 0.0 {
-            let (mut pt, frame, m) = self.eval_local(cps, CORNER_NUDGE, CORNER_NUDGE);
-            pt.p = self.limit(cps);
-            return (pt, frame, m);
-        }
-        match locate(s, t) {
-            Some((m, q, s2, t2, frame)) => {
-                let pt = bspline::eval(&self.grid_recent(m, q, cps), s2, t2);
-                (pt, frame.child(q), m as u8)
-            }
-            None => (
-                PatchPoint {
-                    p: self.limit(cps),
-                    ..Default::default()
-                },
-                Frame::UNIT,
-                MAX_DEPTH as u8,
-            ),
-        }
+        let grid = &mut |m, q| self.grid_recent(m, q, cps);
+        self.eval_local_by(cps, s, t, grid, bspline::eval)
     }
 
     /// [`Self::eval_local`]'s position and first derivatives, the same bits, for a third
@@ -414,21 +396,34 @@ impl StamBasis {
         t: f64,
         grid: &mut impl FnMut(usize, usize) -> ControlGrid,
     ) -> (PointD1, Frame) {
+        let (pt, frame, _) = self.eval_local_by(cps, s, t, grid, bspline::eval_d1);
+        (pt, frame)
+    }
+
+    /// [`Self::eval_local`] with the sub-patches from `grid(m, q)` and the regular
+    /// sub-patch evaluated by `eval` (with or without second derivatives).
+    fn eval_local_by<P: Located>(
+        &self,
+        cps: &[[f64; 3]],
+        s: f64,
+        t: f64,
+        grid: &mut impl FnMut(usize, usize) -> ControlGrid,
+        eval: impl Fn(&ControlGrid, f64, f64) -> P + Copy,
+    ) -> (P, Frame, u8) {
         debug_assert_eq!(cps.len(), self.size);
         if s == 0.0 && t == 0.0 {
-            let (mut pt, frame) = self.eval_local_d1(cps, CORNER_NUDGE, CORNER_NUDGE, grid);
-            pt.p = self.limit(cps);
-            return (pt, frame);
+            let (mut pt, frame, m) =
+                self.eval_local_by(cps, CORNER_NUDGE, CORNER_NUDGE, grid, eval);
+            pt.set_position(self.limit(cps));
+            return (pt, frame, m);
         }
         match locate(s, t) {
-            Some((m, q, s2, t2, frame)) => (bspline::eval_d1(&grid(m, q), s2, t2), frame.child(q)),
-            None => (
-                PointD1 {
-                    p: self.limit(cps),
-                    ..Default::default()
-                },
-                Frame::UNIT,
-            ),
+            Some((m, q, s2, t2, frame)) => (eval(&grid(m, q), s2, t2), frame.child(q), m as u8),
+            None => {
+                let mut pt = P::default();
+                pt.set_position(self.limit(cps));
+                (pt, Frame::UNIT, MAX_DEPTH as u8)
+            }
         }
     }
 
@@ -441,6 +436,24 @@ impl StamBasis {
         t: f64,
     ) -> (PointD1, Frame) {
         self.eval_local_d1(cps, s, t, &mut |m, q| self.grid_recent(m, q, cps))
+    }
+}
+
+/// A patch point whose position can be replaced (the corner's exact limit), with or without
+/// second derivatives.
+trait Located: Default {
+    fn set_position(&mut self, p: [f64; 3]);
+}
+
+impl Located for PatchPoint {
+    fn set_position(&mut self, p: [f64; 3]) {
+        self.p = p;
+    }
+}
+
+impl Located for PointD1 {
+    fn set_position(&mut self, p: [f64; 3]) {
+        self.p = p;
     }
 }
 
