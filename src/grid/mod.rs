@@ -506,6 +506,33 @@ impl GridMesh {
         let _ = prim;
     }
 
+    /// Prefetches what the hit record of quad `(x, y)` of block `b` reads beyond the block's
+    /// vertices: its corners' normals (two rows) and its triangles' levels.
+    #[inline(always)]
+    fn prefetch_record(&self, b: &Block, x: usize, y: usize) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let w = b.cols as usize + 1;
+            let first = b.normal() as usize + y * w + x;
+            let p = self.normals.as_ptr().wrapping_add(first) as *const i8;
+            // SAFETY: prefetching never faults and has no effect on memory.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(p);
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(4 * w + 4));
+            }
+            if b.level & LEVEL_UNIFORM == 0 {
+                let at = b.level as usize + 2 * (y * b.cols as usize + x);
+                // SAFETY: as above.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(self.levels.as_ptr().wrapping_add(at) as *const i8)
+                };
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (b, x, y);
+    }
+
     /// Memory of everything the queries read, in bytes.
     pub fn bytes(&self) -> usize {
         self.blocks.len() * std::mem::size_of::<Block>()
@@ -640,6 +667,7 @@ impl GridMesh {
                         let (x, y) = (2 * wx + qx, 2 * wy + qy);
                         let id = b.triangle(x, y, h);
                         if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+                            self.prefetch_record(b, x, y);
                             best = Some(Best {
                                 at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
                                 id,
