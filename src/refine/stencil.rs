@@ -205,9 +205,9 @@ impl StencilTable {
 
     /// Applies the table to 3-D points.
     pub fn apply_points(&self, src: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        let flat: &[f64] = src.as_flattened();
-        let out = self.apply(flat, 3);
-        out.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        let mut out = vec![[0.0; 3]; self.len()];
+        self.apply_into(src.as_flattened(), 3, out.as_flattened_mut());
+        out
     }
 }
 
