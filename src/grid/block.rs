@@ -167,12 +167,14 @@ pub fn block_boxes(b: &Block, p: impl Fn(usize, usize) -> [f32; 3]) -> Vec<Box4>
         for c in 0..4 {
             let (wx, wy) = (2 * (q % 2) + c % 2, 2 * (q / 2) + c / 2);
             if wx < wc && wy < wr {
+                // The window's box, once: its quadrant's child and a part of the root's.
                 let mut w = Box4::default();
                 window_box(&mut w, 0, wx, wy);
-                window_box(&mut out[1 + q], c, wx, wy);
                 let [lo, hi] = w.child(0);
-                out[0].include(q, lo);
-                out[0].include(q, hi);
+                for (node, child) in [(1 + q, c), (0, q)] {
+                    out[node].include(child, lo);
+                    out[node].include(child, hi);
+                }
             }
         }
     }
