@@ -675,7 +675,7 @@ fn dice_with(
 }
 
 /// The first `n` items of `rest`, which keeps the others.
-fn split_off<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+pub(crate) fn split_off<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
     let (head, tail) = std::mem::take(rest).split_at_mut(n);
     *rest = tail;
     head

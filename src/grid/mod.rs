@@ -29,7 +29,7 @@ pub mod window;
 use crate::bvh::mesh::Corners;
 use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
-use crate::dice::{DicedMesh, GridRegion, LeanDiced};
+use crate::dice::{split_off, DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
@@ -141,13 +141,12 @@ struct Best {
     b2: f32,
 }
 
-/// A block before it is placed: its region (index in [`DicedMesh::grids`]), its header (no
-/// offsets yet) and the bounds of its vertices.
+/// A block as planned: its region (index in [`DicedMesh::grids`]), where it starts in the
+/// region's grid, and its header.
 struct Planned {
     region: u32,
     origin: [usize; 2],
     header: Block,
-    bounds: [[f32; 3]; 2],
 }
 
 /// Splits `n` quads into runs of at most [`BLOCK`], as even as possible, even lengths first.
@@ -174,10 +173,10 @@ fn region_vertex(d: &DicedMesh, g: &GridRegion, x: usize, y: usize) -> usize {
     g.vertex(&d.grid_frames, x as u32, y as u32) as usize
 }
 
-/// The blocks of region `region` (`g`): headers and bounds, nothing stored yet.
-fn plan_region(d: &DicedMesh, region: usize, g: &GridRegion) -> Vec<Planned> {
+/// Appends the blocks of region `region` (`g`) to `out`: their headers, without offsets
+/// (nothing is read from the diced mesh).
+fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>) {
     let [qc, qr] = g.part.quads.map(|x| x as usize);
-    let mut out = Vec::new();
     for &(y0, rows) in &runs(qr) {
         for &(x0, cols) in &runs(qc) {
             let header = Block {
@@ -193,25 +192,25 @@ fn plan_region(d: &DicedMesh, region: usize, g: &GridRegion) -> Vec<Planned> {
                 level: g.level.map_or(0, |l| LEVEL_UNIFORM | l as u32),
                 ..Block::default()
             };
-            let mut bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
-            for y in 0..=rows {
-                for x in 0..=cols {
-                    let p = d.positions[region_vertex(d, g, x0 + x, y0 + y)];
-                    for a in 0..3 {
-                        bounds[0][a] = bounds[0][a].min(p[a]);
-                        bounds[1][a] = bounds[1][a].max(p[a]);
-                    }
-                }
-            }
             out.push(Planned {
                 region: region as u32,
                 origin: [x0, y0],
                 header,
-                bounds,
             });
         }
     }
-    out
+}
+
+/// The error of a diced mesh with more `what` (`count` of them) than the grid core addresses
+/// (`most`).
+fn too_many(count: usize, what: &str, most: &str) -> Error {
+    Error::new(
+        ErrorKind::Usage,
+        format!(
+            "the diced mesh has {count} {what}: more than the grid core addresses ({most}); \
+             lower the dicing rate or split the mesh"
+        ),
+    )
 }
 
 /// Where one block's data goes: its slices of [`GridMesh::coords`], `normals`, `boxes` and
@@ -289,16 +288,30 @@ impl GridMesh {
     /// levels of grid triangles in regions without a [`GridRegion::level`] from `tri_levels`
     /// when given (a lean dicing's), else from their records.
     fn build_from(d: &DicedMesh, tri_levels: Option<&[u8]>) -> Result<GridMesh> {
-        // Plan the blocks (headers and bounds) first; their data is stored once, in place, after
-        // the top level has fixed their order.
-        let plans: Vec<Planned> = d
-            .grids
-            .par_iter()
-            .enumerate()
-            .filter(|(_, g)| g.part.quads[0] > 0 && g.part.quads[1] > 0)
-            .map(|(i, g)| plan_region(d, i, g))
-            .flatten_iter()
-            .collect();
+        // Plan the blocks (headers, then their offsets in region order), store each in place,
+        // in parallel, and take its bounds from its root box; the top level is built over
+        // those bounds and only the headers are then put in its order.
+        let mut plans: Vec<Planned> = Vec::new();
+        for (i, g) in d.grids.iter().enumerate() {
+            if g.part.quads[0] > 0 && g.part.quads[1] > 0 {
+                plan_region(i, g, &mut plans);
+            }
+        }
+        let (mut ncoords, mut nboxes, mut nlevels) = (0usize, 0usize, 0usize);
+        for p in &mut plans {
+            let h = &mut p.header;
+            h.vert = ncoords as u32;
+            h.boxes = nboxes as u32;
+            if h.level & LEVEL_UNIFORM == 0 {
+                h.level = nlevels as u32;
+            }
+            ncoords += 3 * h.num_vertices();
+            nboxes += h.num_boxes();
+            nlevels += h.num_levels();
+        }
+        if plans.len() >= 1 << 24 {
+            return Err(too_many(plans.len(), "grid blocks", "2^24"));
+        }
         // Each vertex's octahedral normal, encoded once (a block border's vertices are held by
         // two or four blocks, a loose triangle's corners by several triangles).
         let mut codes = vec![0u32; d.normals.len()];
@@ -311,7 +324,48 @@ impl GridMesh {
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
             ..GridMesh::default()
         };
-        let mut prim_boxes: Vec<[[f32; 3]; 2]> = plans.iter().map(|b| b.bounds).collect();
+        // Window rows are read four values at a time: the last plane's last row reads past it
+        // into four zeros.
+        m.coords = vec![0.0; ncoords + 4];
+        m.normals = vec![0; ncoords / 3];
+        // Zeroed, not empty boxes: every block overwrites all of its slice (and a zeroed
+        // allocation's pages are first touched by the block that writes them, in parallel).
+        m.boxes = bytemuck::zeroed_vec(nboxes);
+        m.levels = vec![0; nlevels];
+        {
+            let mut jobs = Vec::with_capacity(plans.len());
+            let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
+            let (mut boxes, mut levels) = (&mut m.boxes[..], &mut m.levels[..]);
+            for p in &mut plans {
+                let h = &p.header;
+                let nv = h.num_vertices();
+                let out = BlockSlices {
+                    coords: split_off(&mut coords, 3 * nv),
+                    normals: split_off(&mut normals, nv),
+                    boxes: split_off(&mut boxes, h.num_boxes()),
+                    levels: split_off(&mut levels, h.num_levels()),
+                };
+                jobs.push((p, out));
+            }
+            jobs.into_par_iter().with_min_len(16).for_each(|(p, out)| {
+                p.header.root = fill_block(d, tri_levels, &codes, p, out);
+            });
+        }
+        // Each block's bounds: the union of its root's children (absent ones are empty).
+        let mut prim_boxes: Vec<[[f32; 3]; 2]> = plans
+            .iter()
+            .map(|p| {
+                let r = &p.header.root;
+                let mut b = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+                for c in 0..4 {
+                    for a in 0..3 {
+                        b[0][a] = b[0][a].min(r.lo[a][c]);
+                        b[1][a] = b[1][a].max(r.hi[a][c]);
+                    }
+                }
+                b
+            })
+            .collect();
         let mut loose = Vec::new();
         // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
         // domain's zipper triangles are consecutive, side by side).
@@ -364,25 +418,15 @@ impl GridMesh {
                 m.bounds[1][a] = m.bounds[1][a].max(b[1][a]);
             }
         }
-        if plans.len() >= 1 << 24 || loose.len() >= 1 << 31 {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                format!(
-                    "the diced mesh has {} grid blocks and {} loose triangles: more than the \
-                     grid core addresses (2^24 blocks, 2^31 loose triangles); raise the \
-                     dicing rate or split the mesh",
-                    plans.len(),
-                    loose.len()
-                ),
-            ));
+        if loose.len() >= 1 << 31 {
+            return Err(too_many(loose.len(), "loose triangles", "2^31"));
         }
         if prim_boxes.is_empty() {
-            m.coords.extend_from_slice(&[0.0; 4]);
             return Ok(m);
         }
         let bounds = prim_boxes;
         let mut top = Top::build(&bounds);
-        // Place blocks and strips in the order a depth-first walk meets them.
+        // Place block headers and strips in the order a depth-first walk meets them.
         let mut order = Vec::with_capacity(bounds.len());
         let mut stack = vec![top.root];
         while let Some(r) = stack.pop() {
@@ -399,26 +443,14 @@ impl GridMesh {
         m.blocks.reserve(nblocks);
         m.loose.reserve(loose.len());
         let mut new_id = vec![0u32; bounds.len()];
-        // Each placed block's plan, and the running sizes of the arrays it will be stored in.
-        let mut placed: Vec<usize> = Vec::with_capacity(nblocks);
-        let (mut ncoords, mut nboxes, mut nlevels) = (0usize, 0usize, 0usize);
         for &prim in &order {
             if prim < nblocks {
-                let mut h = plans[prim].header;
-                h.vert = ncoords as u32;
-                h.boxes = nboxes as u32;
-                if h.level & LEVEL_UNIFORM == 0 {
-                    h.level = nlevels as u32;
-                }
-                ncoords += 3 * h.num_vertices();
-                nboxes += h.num_boxes();
-                nlevels += h.num_levels();
+                let h = plans[prim].header;
                 new_id[prim] = m.blocks.len() as u32;
                 m.quadrants
                     .push(if h.two_level() { h.boxes } else { u32::MAX });
                 m.verts.push(h.vert);
                 m.blocks.push(h);
-                placed.push(prim);
             } else {
                 let [first, count] = strips[prim - nblocks];
                 new_id[prim] = (nblocks + m.strips.len()) as u32;
@@ -438,39 +470,6 @@ impl GridMesh {
         for n in &mut top.nodes {
             n.child = n.child.map(|r| renumber(r, &new_id));
         }
-        // Store every block in place, in parallel, each into its own slices. Window rows are read
-        // four values at a time: the last plane's last row reads past it into four zeros.
-        m.coords = vec![0.0; ncoords + 4];
-        m.normals = vec![0; ncoords / 3];
-        // Zeroed, not empty boxes: every block overwrites all of its slice (and a zeroed
-        // allocation's pages are first touched by the block that writes them, in parallel).
-        m.boxes = bytemuck::zeroed_vec(nboxes);
-        m.levels = vec![0; nlevels];
-        let mut jobs = Vec::with_capacity(nblocks);
-        let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
-        let (mut boxes, mut levels) = (&mut m.boxes[..], &mut m.levels[..]);
-        for (h, &prim) in m.blocks.iter_mut().zip(&placed) {
-            let nv = h.num_vertices();
-            let (c, rest) = std::mem::take(&mut coords).split_at_mut(3 * nv);
-            coords = rest;
-            let (n, rest) = std::mem::take(&mut normals).split_at_mut(nv);
-            normals = rest;
-            let (b, rest) = std::mem::take(&mut boxes).split_at_mut(h.num_boxes());
-            boxes = rest;
-            let nl = h.num_levels();
-            let (l, rest) = std::mem::take(&mut levels).split_at_mut(nl);
-            levels = rest;
-            let out = BlockSlices {
-                coords: c,
-                normals: n,
-                boxes: b,
-                levels: l,
-            };
-            jobs.push((h, &plans[prim], out));
-        }
-        jobs.into_par_iter()
-            .with_min_len(16)
-            .for_each(|(h, plan, out)| h.root = fill_block(d, tri_levels, &codes, plan, out));
         m.top = top;
         Ok(m)
     }
@@ -880,5 +879,132 @@ mod tests {
         }
         assert_eq!(runs(16), vec![(0, 8), (8, 8)]);
         assert_eq!(runs(4), vec![(0, 4)]);
+    }
+
+    type Bounds = [[f32; 3]; 2];
+
+    fn grow(b: &mut Bounds, p: [f32; 3]) {
+        for a in 0..3 {
+            b[0][a] = b[0][a].min(p[a]);
+            b[1][a] = b[1][a].max(p[a]);
+        }
+    }
+
+    fn union(b: &mut Bounds, o: Bounds) {
+        for a in 0..3 {
+            b[0][a] = b[0][a].min(o[0][a]);
+            b[1][a] = b[1][a].max(o[1][a]);
+        }
+    }
+
+    const EMPTY_BOX: Bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+
+    /// Bounds of the vertices of quads `x0..x1` × `y0..y1` of block `b` (empty when none).
+    fn quads_bounds(m: &GridMesh, b: &Block, [x0, x1]: [usize; 2], [y0, y1]: [usize; 2]) -> Bounds {
+        let (cols, rows) = (b.cols as usize, b.rows as usize);
+        let mut out = EMPTY_BOX;
+        if x0 >= cols || y0 >= rows {
+            return out;
+        }
+        let w = cols + 1;
+        let c = &m.coords[b.vert as usize..];
+        for y in y0..=y1.min(rows) {
+            for x in x0..=x1.min(cols) {
+                grow(&mut out, std::array::from_fn(|a| c[(3 * y + a) * w + x]));
+            }
+        }
+        out
+    }
+
+    /// The exact bounds of what lies below top-level reference `r`, checking on the way that
+    /// every node's child box is exactly that.
+    fn check_ref(m: &GridMesh, r: top::Ref) -> Bounds {
+        if r & top::LEAF != 0 {
+            let prim = (r & !top::LEAF) as usize;
+            if prim < m.blocks.len() {
+                return m.blocks[prim].root_bounds_checked(m);
+            }
+            let [first, count] = m.strips[prim - m.blocks.len()];
+            let mut out = EMPTY_BOX;
+            for l in &m.loose[first as usize..(first + count) as usize] {
+                l.p.iter().for_each(|&p| grow(&mut out, p));
+            }
+            return out;
+        }
+        let n = &m.top.nodes[r as usize];
+        let mut out = EMPTY_BOX;
+        for c in 0..top::WIDTH {
+            let below = if n.child[c] == top::EMPTY {
+                EMPTY_BOX
+            } else {
+                check_ref(m, n.child[c])
+            };
+            assert_eq!(n.boxes.child(c), below, "top node {r} child {c}");
+            union(&mut out, below);
+        }
+        out
+    }
+
+    impl Block {
+        /// The block's bounds, checking that its root's and quadrants' child boxes are
+        /// exactly those of their windows' vertices.
+        fn root_bounds_checked(&self, m: &GridMesh) -> Bounds {
+            let mut out = EMPTY_BOX;
+            for c in 0..4 {
+                let (cx, cy) = (c % 2, c / 2);
+                let expect = if self.two_level() {
+                    let q = &m.boxes[self.boxes as usize + c];
+                    for w in 0..4 {
+                        let (wx, wy) = (2 * cx + w % 2, 2 * cy + w / 2);
+                        let window =
+                            quads_bounds(m, self, [2 * wx, 2 * wx + 2], [2 * wy, 2 * wy + 2]);
+                        assert_eq!(q.child(w), window, "quadrant {c} window {w}");
+                    }
+                    quads_bounds(m, self, [4 * cx, 4 * cx + 4], [4 * cy, 4 * cy + 4])
+                } else {
+                    quads_bounds(m, self, [2 * cx, 2 * cx + 2], [2 * cy, 2 * cy + 2])
+                };
+                assert_eq!(self.root.child(c), expect, "root child {c}");
+                union(&mut out, expect);
+            }
+            out
+        }
+    }
+
+    /// Every box of the hierarchy, from the top level down to the windows, is exactly the
+    /// bounds of the vertices below it (bit for bit), and the mesh's bounds are all of them:
+    /// the boxes are as tight as `f32` boxes can be, and conservative.
+    #[test]
+    fn every_box_is_exactly_what_lies_below() {
+        use crate::dice::{dice_lean, DiceOptions, DiceRate};
+        use crate::mesh::generate;
+        use crate::patch::{PatchOptions, PatchTable};
+        let mut strips = false;
+        for mesh in [generate::grid(5), generate::star(5, 3)] {
+            let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+            // Uniform rates (every domain one grid, several blocks wide), and edge lengths
+            // (rates differing between domains: zipper strips too).
+            let rates = [1, 3, 8, 13, 19]
+                .map(DiceRate::Uniform)
+                .into_iter()
+                .chain([0.3, 0.11].map(DiceRate::EdgeLength));
+            for rate in rates {
+                let opts = DiceOptions {
+                    rate,
+                    max_rate: 64,
+                    displace: None,
+                };
+                let d = dice_lean(&table, &mesh, &opts).unwrap();
+                let m = GridMesh::build_lean(&d).unwrap();
+                assert!(!m.blocks.is_empty());
+                let all = check_ref(&m, m.top.root);
+                assert_eq!(all, m.bounds, "rate {rate:?}");
+                let mut direct = EMPTY_BOX;
+                d.positions().iter().for_each(|&p| grow(&mut direct, p));
+                assert_eq!(all, direct, "rate {rate:?}");
+                strips |= !m.strips.is_empty();
+            }
+        }
+        assert!(strips, "no mesh had loose triangles");
     }
 }
