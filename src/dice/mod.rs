@@ -163,7 +163,7 @@ impl DicedMesh {
 }
 
 /// A point evaluated on the limit surface.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Point {
     p: [f32; 3],
     n: [f32; 3],
@@ -555,10 +555,16 @@ fn dice_with(
             }
         }
     }
-    let points: Vec<Point> = jobs
-        .par_iter()
-        .map(|&(f, k, u, v)| eval_point(table, displacer.as_ref(), f, k, u, v))
-        .collect::<Result<_>>()?;
+    // Evaluated in place (collecting results would gather per-thread pieces and copy them).
+    let mut points = vec![Point::default(); jobs.len()];
+    points
+        .par_iter_mut()
+        .zip(&jobs)
+        .with_min_len(256)
+        .try_for_each(|(p, &(f, k, u, v))| {
+            *p = eval_point(table, displacer.as_ref(), f, k, u, v)?;
+            Ok::<_, Error>(())
+        })?;
     let shared = Shared {
         points,
         vertex,
