@@ -135,6 +135,29 @@ impl GridRegion {
             self.interior + (j - 1) * (self.part.n[0] - 1) + (i - 1)
         }
     }
+
+    /// The vertices of the `out.len()` consecutive points of row `y` from column `x`, each
+    /// [`Self::vertex`]: a frame row's are a run of the frame, an inner row's are consecutive
+    /// interior vertices between its frame ends.
+    pub fn row_vertices(&self, frames: &[u32], x: u32, y: u32, out: &mut [u32]) {
+        let [qc, qr] = self.part.quads;
+        let f = self.frame as usize;
+        if y == 0 || y == qr {
+            let start = f + if y == 0 { 0 } else { qc as usize + 1 } + x as usize;
+            out.copy_from_slice(&frames[start..start + out.len()]);
+            return;
+        }
+        // Interior vertex of column `x'` of this row: `first + x'`.
+        let j = self.part.origin[1] + y;
+        let first = self.interior + (j - 1) * (self.part.n[0] - 1) + self.part.origin[0] - 1;
+        for (o, xi) in out.iter_mut().zip(x..) {
+            *o = if xi == 0 || xi == qc {
+                self.vertex(frames, xi, y)
+            } else {
+                first + xi
+            };
+        }
+    }
 }
 
 impl DicedMesh {
@@ -972,5 +995,82 @@ impl DomainCtx<'_> {
             };
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+    use crate::patch::{PatchOptions, PatchTable};
+
+    /// A row's vertices, taken at once, are each point's [`GridRegion::vertex`]: every row of
+    /// every grid region (frame rows, inner rows, grids not starting at the domain's corner
+    /// where sides are zipped), from every start column, every length.
+    #[test]
+    fn row_vertices_are_the_points_vertices() {
+        let mesh = generate::star(5, 3);
+        let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        let mut partial = false;
+        // Seen from close by one side, rates differ between neighbours: zipped sides.
+        let near = DiceRate::Screen(ScreenRate {
+            eye: [0.3, 0.2, 1.0],
+            pixels_per_radian: 400.0,
+            pixels_per_edge: 4.0,
+        });
+        for rate in [DiceRate::Uniform(1), DiceRate::Uniform(6), near] {
+            let opts = DiceOptions {
+                rate,
+                max_rate: 64,
+                displace: None,
+            };
+            let d = dice(&table, &mesh, &opts).unwrap();
+            for g in &d.grids {
+                let [qc, qr] = g.part.quads;
+                partial |= g.part.quads != g.part.n;
+                for y in 0..=qr {
+                    for x in 0..=qc {
+                        for len in 0..=(qc - x + 1) {
+                            let mut got = vec![0; len as usize];
+                            g.row_vertices(&d.grid_frames, x, y, &mut got);
+                            let want: Vec<u32> = (x..x + len)
+                                .map(|xi| g.vertex(&d.grid_frames, xi, y))
+                                .collect();
+                            assert_eq!(got, want, "{rate:?} region {g:?} row {y} from {x}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(partial, "no grid region left a side to a zipper");
+        // Grids inside their domains (origin past the domain's first row and column), the
+        // frame numbered apart from the interior.
+        for (origin, quads) in [([1, 1], [4, 3]), ([0, 2], [5, 1]), ([2, 0], [1, 4])] {
+            let g = GridRegion {
+                first_triangle: 0,
+                face: 0,
+                k: 0,
+                part: GridPart {
+                    n: [7, 6],
+                    origin,
+                    quads,
+                },
+                level: None,
+                frame: 3,
+                interior: 1000,
+            };
+            let frames: Vec<u32> = (0..3 + 2 * (quads[0] + quads[1] + 2))
+                .map(|i| 500 + i)
+                .collect();
+            for y in 0..=quads[1] {
+                for x in 0..=quads[0] {
+                    let mut got = vec![0; (quads[0] - x + 1) as usize];
+                    g.row_vertices(&frames, x, y, &mut got);
+                    let want: Vec<u32> =
+                        (x..=quads[0]).map(|xi| g.vertex(&frames, xi, y)).collect();
+                    assert_eq!(got, want, "{origin:?} {quads:?} row {y} from {x}");
+                }
+            }
+        }
     }
 }

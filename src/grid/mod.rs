@@ -167,12 +167,6 @@ fn runs(n: usize) -> Vec<(usize, usize)> {
     out
 }
 
-/// The diced-mesh vertex at grid vertex `(x, y)` of region `g` (its frame or its interior;
-/// the triangles are not read).
-fn region_vertex(d: &DicedMesh, g: &GridRegion, x: usize, y: usize) -> usize {
-    g.vertex(&d.grid_frames, x as u32, y as u32) as usize
-}
-
 /// Appends the blocks of region `region` (`g`) to `out`: their headers, without offsets
 /// (nothing is read from the diced mesh).
 fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>) {
@@ -234,14 +228,16 @@ fn fill_block(
     let h = &p.header;
     let (cols, rows) = (h.cols as usize, h.rows as usize);
     let [x0, y0] = p.origin;
+    let mut row = [0u32; BLOCK + 1];
+    let row = &mut row[..=cols];
     for y in 0..=rows {
-        for x in 0..=cols {
-            let v = region_vertex(d, g, x0 + x, y0 + y);
-            let q = d.positions[v];
+        g.row_vertices(&d.grid_frames, x0 as u32, (y0 + y) as u32, row);
+        for (x, &v) in row.iter().enumerate() {
+            let q = d.positions[v as usize];
             for a in 0..3 {
                 out.coords[(3 * y + a) * (cols + 1) + x] = q[a];
             }
-            out.normals[y * (cols + 1) + x] = codes[v];
+            out.normals[y * (cols + 1) + x] = codes[v as usize];
         }
     }
     let coords = &*out.coords;
