@@ -1005,8 +1005,9 @@ mod tests {
     use crate::patch::{PatchOptions, PatchTable};
 
     /// A row's vertices, taken at once, are each point's [`GridRegion::vertex`]: every row of
-    /// every grid region (frame rows, inner rows, grids not starting at the domain's corner
-    /// where sides are zipped), from every start column, every length.
+    /// every grid region of a diced mesh (frame rows, inner rows, grids that leave a side to a
+    /// zipper), from every start column, every length; and every row of synthetic regions
+    /// that start inside their domain.
     #[test]
     fn row_vertices_are_the_points_vertices() {
         let mesh = generate::star(5, 3);

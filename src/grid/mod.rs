@@ -266,9 +266,10 @@ fn fill_block(
 }
 
 impl GridMesh {
-    /// Builds the grid mesh of `d`; the diced mesh is not kept. Blocks and loose triangles
-    /// are stored in the order of the top level's leaves. Fails when the mesh needs more than
-    /// 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
+    /// Builds the grid mesh of `d`; the diced mesh is not kept. Block headers and loose
+    /// triangles are stored in the order of the top level's leaves, the blocks' vertices,
+    /// normals, boxes and levels region by region, as the blocks were planned. Fails when the
+    /// mesh needs more than 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
     pub fn build(d: &DicedMesh) -> Result<GridMesh> {
         Self::build_from(d, None)
     }
