@@ -26,7 +26,7 @@ impl Ray {
     }
 }
 
-/// A ray in double precision, as the exact intersector takes it ([`crate::bvh::exact`]): the
+/// A ray in double precision, as the exact intersector takes it ([`crate::exact`]): the
 /// answer is for this ray, not for its `f32` rounding (which only seeds the search through the
 /// diced mesh's BVH, [`Ray64::to_f32`]).
 #[derive(Clone, Copy, Debug, PartialEq)]

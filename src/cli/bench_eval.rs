@@ -1,5 +1,5 @@
 //! `limitray bench-eval`: exact limit evaluation through a [`PatchTable`] — the table build
-//! once, then batches of random `(face, k, u, v)` queries ([`eval_queries`]) evaluated in
+//! once, then batches of random `(face, k, u, v)` queries ([`crate::harness::eval::eval_queries`]) evaluated in
 //! parallel ([`eval_batch`]).
 
 use super::args::{MeshSource, RuleArgs, SurfaceArg, ThreadArgs};
@@ -71,7 +71,7 @@ fn checksum(points: &[[f64; 3]]) -> f64 {
 /// Benchmarks exact limit evaluation on `mesh`.
 ///
 /// Builds the feature-adaptive [`PatchTable`] (default maximum level, single-crease patches;
-/// timed once, in the calling thread), draws `samples` queries with [`eval_queries`] (seeded
+/// timed once, in the calling thread), draws `samples` queries with [`crate::harness::eval::eval_queries`] (seeded
 /// by `seed`), then evaluates them [`EVAL_REPS`] times with [`eval_batch`] in a rayon pool of
 /// `threads` threads. Returns a JSON object with `build_ms`, `eval_ms` (median batch time),
 /// `evals_per_s` (`samples` / median batch time), `samples`, `threads`, `reps`, `seed`,

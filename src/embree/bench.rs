@@ -27,7 +27,7 @@ use std::time::Instant;
 /// Where the translated copy for the second leak count goes (as in `../shared/DESIGN.md`).
 pub const FAR_OFFSET: [f64; 3] = [148376.0, 1234.0, -223423.0];
 
-/// Settings of [`bench`].
+/// Settings of [`bench()`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BenchOptions {
     /// Uniform rate: limitray's dicing rate and Embree's tessellation rate.
@@ -98,7 +98,7 @@ pub struct EngineResult {
     pub leaks_far: usize,
 }
 
-/// Everything [`bench`] measures.
+/// Everything [`bench()`] measures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BenchReport {
     /// Control faces.

@@ -1,5 +1,5 @@
 //! Cross-checks against Embree 4: the limit surface ([`interpolation_check`],
-//! [`surface_check`]) and the triangle intersector / BVH ([`triangle_check`]).
+//! [`surface_check_with`]) and the triangle intersector / BVH ([`triangle_check_with`]).
 //!
 //! Distances are reported relative to the bounding-box diagonal of the control mesh.
 //! Embree's subdivision geometry always uses Chaikin's crease rule, so limitray is run in

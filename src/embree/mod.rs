@@ -5,7 +5,7 @@
 //!   (every handle is released on drop, every call is checked with `rtcGetDeviceError`);
 //! - [`subdiv`]: a [`crate::mesh::ControlMesh`] as `RTC_GEOMETRY_TYPE_SUBDIVISION`;
 //! - [`crosscheck`]: limit-surface and triangle/BVH agreement reports;
-//! - [`cli`]: the `crosscheck` and `bench` subcommands.
+//! - `crate::cli::embree`: the `crosscheck` and `bench` subcommands.
 //!
 //! The library is set up by `scripts/setup-embree.sh` and linked by `build.rs`.
 

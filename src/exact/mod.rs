@@ -6,7 +6,7 @@
 //! convex hull of their control points). A hierarchy over the pieces' boxes ([`tree`]) and a
 //! priority queue ordered by where the ray enters each bound visit them front to back. A
 //! piece the ray's line misses is dropped; otherwise, projected onto the plane perpendicular
-//! to the ray, a Bézier piece goes through the Krawczyk test ([`krawczyk`]), which proves
+//! to the ray, a Bézier piece goes through the Krawczyk test ([`mod@krawczyk`]), which proves
 //! that it holds no crossing or exactly one; the one crossing is then polished by Newton's
 //! method on the table's own evaluation (`P(u, v) = o + t d`, in `f64`). Undecided pieces are
 //! split (de Casteljau for Bézier pieces, one more subdivision step for hull pieces) until

@@ -12,7 +12,7 @@
 //! words over several storage bindings), [`trace`] (closest hits, `trace --backend gpu`),
 //! [`render`] (the path tracer, `render --backend gpu`), [`texture`] (its texture maps and
 //! texture coordinates), [`exact`] (the exact edge function,
-//! for tests), [`cli`] (command-line pieces).
+//! for tests); the command-line pieces are in `crate::cli::gpu`.
 
 pub mod device;
 pub mod exact;

@@ -32,7 +32,7 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
 const LANES: usize = 8;
 
 /// [`oct_encode`] of every normal of `normals` into `codes` (of the same length): the same
-/// codes, [`LANES`] normals side by side in lanes the compiler vectorises (AVX2 where
+/// codes, eight normals side by side in lanes the compiler vectorises (AVX2 where
 /// detected), the rest one by one.
 pub fn oct_encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
     assert_eq!(normals.len(), codes.len(), "one code per normal");

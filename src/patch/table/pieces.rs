@@ -1,7 +1,7 @@
 //! The limit surface of a patch table as pieces with certain bounds, for the reference
 //! intersector ([`crate::exact`]).
 //!
-//! A piece is a part of one (sub-)face's domain, an affine image of `[0, 1]²` (a [`Frame`]),
+//! A piece is a part of one (sub-)face's domain, an affine image of `[0, 1]²` (a quadtree frame),
 //! with a description of the surface over it that bounds it:
 //!
 //! - [`Shape::Bezier`]: the surface is exactly a bicubic polynomial there, given by its
