@@ -53,11 +53,17 @@ impl Block {
     /// The level of half `h` of quad `(x, y)`, from the block's uniform level or `levels`
     /// (the grid mesh's per-triangle levels).
     pub fn triangle_level(&self, levels: &[u8], x: usize, y: usize, h: usize) -> u8 {
-        if self.level & LEVEL_UNIFORM != 0 {
-            self.level as u8
-        } else {
-            levels[self.level as usize + 2 * (y * self.cols as usize + x) + h]
+        match self.level_index(x, y, h) {
+            Some(i) => levels[i],
+            None => self.level as u8,
         }
+    }
+
+    /// Where the level of half `h` of quad `(x, y)` is in the grid mesh's per-triangle levels;
+    /// `None` when the block has one level for all its triangles.
+    pub fn level_index(&self, x: usize, y: usize, h: usize) -> Option<usize> {
+        (self.level & LEVEL_UNIFORM == 0)
+            .then(|| self.level as usize + 2 * (y * self.cols as usize + x) + h)
     }
 
     /// Number of per-triangle levels the block stores.

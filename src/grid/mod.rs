@@ -349,19 +349,9 @@ impl GridMesh {
             });
         }
         // Each block's bounds: the union of its root's children (absent ones are empty).
-        let mut prim_boxes: Vec<[[f32; 3]; 2]> = plans
+        let mut prim_boxes: Vec<top::Bounds> = plans
             .iter()
-            .map(|p| {
-                let r = &p.header.root;
-                let mut b = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
-                for c in 0..4 {
-                    for a in 0..3 {
-                        b[0][a] = b[0][a].min(r.lo[a][c]);
-                        b[1][a] = b[1][a].max(r.hi[a][c]);
-                    }
-                }
-                b
-            })
+            .map(|p| (0..4).fold(top::NONE, |b, c| top::union(b, p.header.root.child(c))))
             .collect();
         let mut loose = Vec::new();
         // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
@@ -389,16 +379,11 @@ impl GridMesh {
                 Some(s) if same && (s[1] as usize) < STRIP => s[1] += 1,
                 _ => {
                     strips.push([loose.len() as u32, 1]);
-                    prim_boxes.push([[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]);
+                    prim_boxes.push(top::NONE);
                 }
             }
             let b = prim_boxes.last_mut().expect("the strip's box");
-            for q in p {
-                for a in 0..3 {
-                    b[0][a] = b[0][a].min(q[a]);
-                    b[1][a] = b[1][a].max(q[a]);
-                }
-            }
+            *b = p.iter().fold(*b, |b, &q| top::union(b, [q, q]));
             loose.push(Loose {
                 p,
                 n: t.map(|v| codes[v as usize]),
@@ -409,12 +394,7 @@ impl GridMesh {
                 level: info.level,
             });
         }
-        for b in &prim_boxes {
-            for a in 0..3 {
-                m.bounds[0][a] = m.bounds[0][a].min(b[0][a]);
-                m.bounds[1][a] = m.bounds[1][a].max(b[1][a]);
-            }
-        }
+        m.bounds = prim_boxes.iter().fold(m.bounds, |a, &b| top::union(a, b));
         if loose.len() >= 1 << 31 {
             return Err(too_many(loose.len(), "loose triangles", "2^31"));
         }
@@ -512,13 +492,14 @@ impl GridMesh {
             let w = b.cols as usize + 1;
             let first = b.normal() as usize + y * w + x;
             let p = self.normals.as_ptr().wrapping_add(first) as *const i8;
+            // The quad's diagonal corners `(x, y)` and `(x + 1, y + 1)`; the other two share
+            // their lines unless a line ends between them.
             // SAFETY: prefetching never faults and has no effect on memory.
             unsafe {
                 _mm_prefetch::<_MM_HINT_T0>(p);
                 _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(4 * w + 4));
             }
-            if b.level & LEVEL_UNIFORM == 0 {
-                let at = b.level as usize + 2 * (y * b.cols as usize + x);
+            if let Some(at) = b.level_index(x, y, 0) {
                 // SAFETY: as above.
                 unsafe {
                     _mm_prefetch::<_MM_HINT_T0>(self.levels.as_ptr().wrapping_add(at) as *const i8)
@@ -878,23 +859,11 @@ mod tests {
         assert_eq!(runs(4), vec![(0, 4)]);
     }
 
-    type Bounds = [[f32; 3]; 2];
+    use top::{union, Bounds, NONE as EMPTY_BOX};
 
     fn grow(b: &mut Bounds, p: [f32; 3]) {
-        for a in 0..3 {
-            b[0][a] = b[0][a].min(p[a]);
-            b[1][a] = b[1][a].max(p[a]);
-        }
+        *b = union(*b, [p, p]);
     }
-
-    fn union(b: &mut Bounds, o: Bounds) {
-        for a in 0..3 {
-            b[0][a] = b[0][a].min(o[0][a]);
-            b[1][a] = b[1][a].max(o[1][a]);
-        }
-    }
-
-    const EMPTY_BOX: Bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
 
     /// Bounds of the vertices of quads `x0..x1` × `y0..y1` of block `b` (empty when none).
     fn quads_bounds(m: &GridMesh, b: &Block, [x0, x1]: [usize; 2], [y0, y1]: [usize; 2]) -> Bounds {
@@ -937,7 +906,7 @@ mod tests {
                 check_ref(m, n.child[c])
             };
             assert_eq!(n.boxes.child(c), below, "top node {r} child {c}");
-            union(&mut out, below);
+            out = union(out, below);
         }
         out
     }
@@ -962,7 +931,7 @@ mod tests {
                     quads_bounds(m, self, [2 * cx, 2 * cx + 2], [2 * cy, 2 * cy + 2])
                 };
                 assert_eq!(self.root.child(c), expect, "root child {c}");
-                union(&mut out, expect);
+                out = union(out, expect);
             }
             out
         }

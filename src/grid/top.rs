@@ -69,16 +69,19 @@ impl Boundable for PrimBox {
     }
 }
 
-type Bounds = [[f32; 3]; 2];
+/// An axis-aligned box, `[lo, hi]`.
+pub(super) type Bounds = [[f32; 3]; 2];
 
-fn union(a: Bounds, b: Bounds) -> Bounds {
+/// The smallest box holding `a` and `b`.
+pub(super) fn union(a: Bounds, b: Bounds) -> Bounds {
     [
         std::array::from_fn(|i| a[0][i].min(b[0][i])),
         std::array::from_fn(|i| a[1][i].max(b[1][i])),
     ]
 }
 
-const NONE: Bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+/// The empty box (the union's identity).
+pub(super) const NONE: Bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
 
 impl Top {
     /// Builds the top level over primitives with bounds `boxes` (`[min, max]`).
