@@ -54,6 +54,15 @@ pub struct Topology {
     pub vert_tags: Vec<VertexTag>,
 }
 
+/// The vertex rings of a [`Topology`], as [`Topology::rings`] finds them.
+pub(crate) struct Rings {
+    vert_faces: Vec<u32>,
+    vert_face_corner: Vec<u32>,
+    vert_edge_offsets: Vec<u32>,
+    vert_edges: Vec<u32>,
+    vert_tags: Vec<VertexTag>,
+}
+
 fn ranges(counts: &[u32]) -> Vec<u32> {
     let mut off = Vec::with_capacity(counts.len() + 1);
     let mut acc = 0u32;
@@ -153,14 +162,15 @@ impl Topology {
             }
             i = j;
         }
-        Ok(Self::from_edges_with_nonmanifold(
+        Ok(Self::without_rings(
             num_vertices,
             face_offsets.to_vec(),
             face_verts.to_vec(),
             face_edges,
             edge_verts,
             &forced,
-        ))
+        )
+        .with_ordered_rings())
     }
 
     /// Completes the adjacency from faces whose edges are already known: `face_edges[i]` is
@@ -174,7 +184,7 @@ impl Topology {
         face_edges: Vec<u32>,
         edge_verts: Vec<[u32; 2]>,
     ) -> Self {
-        Self::from_edges_with_nonmanifold(
+        Self::without_rings(
             num_vertices,
             face_offsets,
             face_verts,
@@ -182,11 +192,40 @@ impl Topology {
             edge_verts,
             &[],
         )
+        .with_ordered_rings()
     }
 
-    /// [`Self::from_edges`], with the edges in `forced` non-manifold whatever their faces
-    /// (cut-outs of a level keep the level's non-manifold edges so).
-    pub fn from_edges_with_nonmanifold(
+    /// The vertex rings of a topology [`Self::without_rings`] gave, each ordered by walking its
+    /// faces ([`Self::order_ring`]).
+    pub fn with_ordered_rings(mut self) -> Self {
+        // Vertex -> face corners, unordered (by face, then corner), then ordered.
+        let nf = self.num_faces();
+        let mut unordered = vec![(0u32, 0u32); self.face_verts.len()];
+        {
+            let mut fill = self.vert_face_offsets.clone();
+            for f in 0..nf {
+                for (k, &v) in self.face_vertices(f).iter().enumerate() {
+                    let slot = &mut fill[v as usize];
+                    unordered[*slot as usize] = (f as u32, k as u32);
+                    *slot += 1;
+                }
+            }
+        }
+        let offsets = &self.vert_face_offsets;
+        let rings = self.rings(|v, fan, edges| {
+            let (a, b) = (offsets[v] as usize, offsets[v + 1] as usize);
+            self.order_ring(&unordered[a..b], fan, edges)
+        });
+        self.set_rings(rings);
+        self
+    }
+
+    /// The adjacency of faces whose edges are known, as [`Self::from_edges`] takes them, with
+    /// the edges in `forced` non-manifold whatever their faces (cut-outs of a level keep the
+    /// level's non-manifold edges so), up to the vertex rings: edges' faces and tags, and how
+    /// many faces each vertex has ([`Self::vert_face_offsets`]). The rings are left empty, for
+    /// [`Self::with_ordered_rings`] (or rings found otherwise, [`Self::set_rings`]).
+    pub fn without_rings(
         num_vertices: usize,
         face_offsets: Vec<u32>,
         face_verts: Vec<u32>,
@@ -197,10 +236,6 @@ impl Topology {
         let nf = face_offsets.len().saturating_sub(1);
         let nfv = face_verts.len();
         let ne = edge_verts.len();
-        let mut fe_face = vec![0u32; nfv];
-        for f in 0..nf {
-            fe_face[face_offsets[f] as usize..face_offsets[f + 1] as usize].fill(f as u32);
-        }
         // Uses of each edge, and how many run from its first vertex to its second.
         let mut edge_face_counts = vec![0u32; ne];
         let mut forward = vec![0u32; ne];
@@ -219,35 +254,23 @@ impl Topology {
         let mut edge_faces = vec![0u32; nfv];
         {
             let mut fill = edge_face_offsets.clone();
-            for (fe, &e) in face_edges.iter().enumerate() {
-                let slot = &mut fill[e as usize];
-                edge_faces[*slot as usize] = fe_face[fe];
-                *slot += 1;
+            for f in 0..nf {
+                let (a, b) = (face_offsets[f] as usize, face_offsets[f + 1] as usize);
+                for &e in &face_edges[a..b] {
+                    let slot = &mut fill[e as usize];
+                    edge_faces[*slot as usize] = f as u32;
+                    *slot += 1;
+                }
             }
         }
         for &e in forced {
             edge_nonmanifold[e as usize] = true;
         }
-        // Vertex -> face corners, unordered first.
         let mut vcount = vec![0u32; num_vertices];
         for &v in &face_verts {
             vcount[v as usize] += 1;
         }
-        let vert_face_offsets = ranges(&vcount);
-        let mut vf_unordered = vec![(0u32, 0u32); nfv];
-        {
-            let mut fill = vert_face_offsets.clone();
-            for f in 0..nf {
-                let a = face_offsets[f] as usize;
-                let b = face_offsets[f + 1] as usize;
-                for (k, &v) in face_verts[a..b].iter().enumerate() {
-                    let slot = &mut fill[v as usize];
-                    vf_unordered[*slot as usize] = (f as u32, k as u32);
-                    *slot += 1;
-                }
-            }
-        }
-        let mut topo = Topology {
+        Topology {
             num_vertices,
             face_offsets,
             face_verts,
@@ -256,73 +279,110 @@ impl Topology {
             edge_face_offsets,
             edge_faces,
             edge_nonmanifold,
-            vert_face_offsets,
-            vert_faces: vec![0; nfv],
-            vert_face_corner: vec![0; nfv],
-            vert_edge_offsets: Vec::with_capacity(num_vertices + 1),
-            vert_edges: Vec::with_capacity(nfv + nfv / 8),
-            vert_tags: Vec::with_capacity(num_vertices),
-        };
-        // Order each vertex's ring, in parallel blocks of vertices.
+            vert_face_offsets: ranges(&vcount),
+            vert_faces: Vec::new(),
+            vert_face_corner: Vec::new(),
+            vert_edge_offsets: Vec::new(),
+            vert_edges: Vec::new(),
+            vert_tags: Vec::new(),
+        }
+    }
+
+    /// Every vertex's ring from `ring(v, fan, edges)`, which leaves vertex `v`'s ordered face
+    /// corners in `fan` (as many as [`Self::vert_face_offsets`] gives it) and its edges in
+    /// `edges`, and returns its tags; in parallel blocks of vertices.
+    pub(crate) fn rings<F>(&self, ring: F) -> Rings
+    where
+        F: Fn(usize, &mut Vec<(u32, u32)>, &mut Vec<u32>) -> VertexTag + Sync,
+    {
         const BLOCK: usize = 4096;
         struct Block {
             tags: Vec<VertexTag>,
-            fans: Vec<(u32, u32)>,
             edges: Vec<u32>,
             counts: Vec<u32>,
         }
-        let blocks: Vec<Block> = (0..num_vertices.div_ceil(BLOCK))
+        let nv = self.num_vertices;
+        let nfv = self.face_verts.len();
+        let mut vert_faces = vec![0u32; nfv];
+        let mut vert_face_corner = vec![0u32; nfv];
+        // Each block writes its vertices' corners in place; edges are gathered per block.
+        let mut jobs = Vec::with_capacity(nv.div_ceil(BLOCK));
+        {
+            let (mut faces, mut corners) = (&mut vert_faces[..], &mut vert_face_corner[..]);
+            for blk in 0..nv.div_ceil(BLOCK) {
+                let range = blk * BLOCK..((blk + 1) * BLOCK).min(nv);
+                let n = (self.vert_face_offsets[range.end] - self.vert_face_offsets[range.start])
+                    as usize;
+                let (f, rest) = std::mem::take(&mut faces).split_at_mut(n);
+                faces = rest;
+                let (c, rest) = std::mem::take(&mut corners).split_at_mut(n);
+                corners = rest;
+                jobs.push((range, f, c));
+            }
+        }
+        let blocks: Vec<Block> = jobs
             .into_par_iter()
             .with_min_len(crate::threads::min_len())
-            .map(|blk| {
-                let range = blk * BLOCK..((blk + 1) * BLOCK).min(num_vertices);
+            .map(|(range, faces, corners)| {
                 let mut out = Block {
                     tags: Vec::with_capacity(range.len()),
-                    fans: Vec::new(),
                     edges: Vec::new(),
                     counts: Vec::with_capacity(range.len()),
                 };
+                let base = self.vert_face_offsets[range.start] as usize;
                 let mut fan = Vec::new();
                 let mut edges = Vec::new();
                 for v in range {
-                    let (a, b) = (
-                        topo.vert_face_offsets[v] as usize,
-                        topo.vert_face_offsets[v + 1] as usize,
+                    out.tags.push(ring(v, &mut fan, &mut edges));
+                    let at = self.vert_face_offsets[v] as usize - base;
+                    debug_assert_eq!(
+                        fan.len(),
+                        (self.vert_face_offsets[v + 1] - self.vert_face_offsets[v]) as usize
                     );
-                    out.tags
-                        .push(topo.order_ring(&vf_unordered[a..b], &mut fan, &mut edges));
-                    out.fans.extend_from_slice(&fan);
+                    for (k, &(f, c)) in fan.iter().enumerate() {
+                        faces[at + k] = f;
+                        corners[at + k] = c;
+                    }
                     out.edges.extend_from_slice(&edges);
                     out.counts.push(edges.len() as u32);
                 }
                 out
             })
             .collect();
-        let mut vert_edges = std::mem::take(&mut topo.vert_edges);
-        let mut vert_edge_offsets = std::mem::take(&mut topo.vert_edge_offsets);
+        let mut vert_edges = Vec::with_capacity(blocks.iter().map(|b| b.edges.len()).sum());
+        let mut vert_edge_offsets = Vec::with_capacity(nv + 1);
+        let mut vert_tags = Vec::with_capacity(nv);
         vert_edge_offsets.push(0);
-        let mut at = 0;
         for blk in blocks {
-            for (k, &(f, c)) in blk.fans.iter().enumerate() {
-                topo.vert_faces[at + k] = f;
-                topo.vert_face_corner[at + k] = c;
-            }
-            at += blk.fans.len();
             vert_edges.extend_from_slice(&blk.edges);
             for c in blk.counts {
                 let last = *vert_edge_offsets.last().unwrap();
                 vert_edge_offsets.push(last + c);
             }
-            topo.vert_tags.extend(blk.tags);
+            vert_tags.extend(blk.tags);
         }
-        topo.vert_edges = vert_edges;
-        topo.vert_edge_offsets = vert_edge_offsets;
-        topo
+        Rings {
+            vert_faces,
+            vert_face_corner,
+            vert_edge_offsets,
+            vert_edges,
+            vert_tags,
+        }
     }
 
-    /// Orders the face corners around one vertex; returns its tags and leaves the ordered
-    /// corners in `fan` and its edges in `edges`.
-    fn order_ring(
+    /// Stores the vertex rings of [`Self::rings`].
+    pub(crate) fn set_rings(&mut self, rings: Rings) {
+        self.vert_faces = rings.vert_faces;
+        self.vert_face_corner = rings.vert_face_corner;
+        self.vert_edge_offsets = rings.vert_edge_offsets;
+        self.vert_edges = rings.vert_edges;
+        self.vert_tags = rings.vert_tags;
+    }
+
+    /// Orders the face corners around one vertex, given by face and then corner (as
+    /// [`Self::from_edges`] lists them); returns its tags and leaves the ordered corners in
+    /// `fan` and its edges in `edges`.
+    pub(crate) fn order_ring(
         &self,
         corners: &[(u32, u32)],
         fan: &mut Vec<(u32, u32)>,

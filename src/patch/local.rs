@@ -76,40 +76,103 @@ impl LocalMesh {
     }
 }
 
+/// A renumbering of some of `0..n` as `0, 1, 2, …` in the order first met: a dense table
+/// where many are renumbered (a level's cut-out around many seeds), a hash map where few are
+/// (a small neighbourhood of a large level, where clearing a table of `n` would dominate).
+enum Renumber {
+    Dense(Vec<u32>),
+    Sparse(HashMap<u32, u32>),
+}
+
+impl Renumber {
+    /// A renumbering of `0..n` expecting about `expected` numbers.
+    fn new(n: usize, expected: usize) -> Self {
+        if expected.saturating_mul(16) >= n {
+            Renumber::Dense(vec![u32::MAX; n])
+        } else {
+            Renumber::Sparse(HashMap::default())
+        }
+    }
+
+    /// The new number of `x`, given by `add` (called once, on first sight).
+    #[inline]
+    fn get_or_add(&mut self, x: u32, add: impl FnOnce() -> u32) -> u32 {
+        match self {
+            Renumber::Dense(table) => {
+                let slot = &mut table[x as usize];
+                if *slot == u32::MAX {
+                    *slot = add();
+                }
+                *slot
+            }
+            Renumber::Sparse(map) => *map.entry(x).or_insert_with(add),
+        }
+    }
+
+    /// The new number of `x`, which has one.
+    #[inline]
+    fn get(&self, x: u32) -> u32 {
+        match self {
+            Renumber::Dense(table) => table[x as usize],
+            Renumber::Sparse(map) => map[&x],
+        }
+    }
+}
+
 /// Cuts the faces within `rings` vertex-rings of the `seeds` out of `level`. Returns the new
 /// level (seeds first, in order, keeping their vertex order), the original index of each new
 /// vertex, and the new index of each seed.
 pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<u32>, Vec<u32>) {
+    let (cut, old, seed_new, _) = extract_faces_within(level, seeds, rings);
+    (cut, old, seed_new)
+}
+
+/// [`extract_faces`], with the number of the cut-out's faces within `rings − 1` rings of the
+/// seeds (all of them when `rings` is 0). The cut-out lists its faces ring by ring and
+/// numbers vertices and edges in the order its faces first use them, so those faces' vertices
+/// and edges come first too: the faces within `rings − 1` rings are a cut-out of their own,
+/// numbered as a prefix of this one ([`crate::refine::step::refine_inner`] refines it).
+pub fn extract_faces_within(
+    level: &Level,
+    seeds: &[u32],
+    rings: usize,
+) -> (Level, Vec<u32>, Vec<u32>, usize) {
     let topo = &level.topo;
+    // A cut-out holds about 16 faces per seed (two rings of a regular quad).
+    let expected = seeds.len() * if rings == 0 { 1 } else { 16 };
     let mut faces: Vec<u32> = Vec::new();
-    let mut seen: HashMap<u32, u32> = HashMap::default();
+    let mut seen = Renumber::new(topo.num_faces(), expected);
     let mut seed_new = Vec::with_capacity(seeds.len());
     for &f in seeds {
-        let id = *seen.entry(f).or_insert_with(|| {
+        let id = seen.get_or_add(f, || {
             faces.push(f);
             (faces.len() - 1) as u32
         });
         seed_new.push(id);
     }
     let mut frontier = faces.clone();
-    for _ in 0..rings {
+    let mut inner = faces.len();
+    for ring in 0..rings {
+        if ring + 1 == rings {
+            inner = faces.len();
+        }
         let mut next = Vec::new();
         for &f in &frontier {
             for &v in topo.face_vertices(f as usize) {
                 for &g in topo.vertex_faces(v as usize) {
-                    if let std::collections::hash_map::Entry::Vacant(e) = seen.entry(g) {
-                        e.insert(faces.len() as u32);
+                    seen.get_or_add(g, || {
                         faces.push(g);
                         next.push(g);
-                    }
+                        (faces.len() - 1) as u32
+                    });
                 }
             }
         }
         frontier = next;
     }
-    let mut vmap: HashMap<u32, u32> = HashMap::default();
+    let mut vmap = Renumber::new(topo.num_vertices, expected);
     let mut verts_old = Vec::new();
-    let mut emap: HashMap<u32, u32> = HashMap::default();
+    let mut emap = Renumber::new(topo.num_edges(), 2 * expected);
     let mut edges_old = Vec::new();
     let mut offsets = vec![0u32];
     let mut fverts = Vec::new();
@@ -120,12 +183,12 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
             .iter()
             .zip(topo.face_edge_list(f as usize))
         {
-            let id = *vmap.entry(v).or_insert_with(|| {
+            let id = vmap.get_or_add(v, || {
                 verts_old.push(v);
                 (verts_old.len() - 1) as u32
             });
             fverts.push(id);
-            let eid = *emap.entry(e).or_insert_with(|| {
+            let eid = emap.get_or_add(e, || {
                 edges_old.push(e);
                 (edges_old.len() - 1) as u32
             });
@@ -139,7 +202,7 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
     // non-manifold in the level stay so in the cut-out.
     let edge_verts = edges_old
         .iter()
-        .map(|&e| topo.edge_verts[e as usize].map(|v| vmap[&v]))
+        .map(|&e| topo.edge_verts[e as usize].map(|v| vmap.get(v)))
         .collect();
     let nonmanifold: Vec<u32> = edges_old
         .iter()
@@ -147,14 +210,15 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
         .filter(|(_, &e)| topo.edge_nonmanifold[e as usize])
         .map(|(i, _)| i as u32)
         .collect();
-    let sub = Topology::from_edges_with_nonmanifold(
+    let sub = Topology::without_rings(
         verts_old.len(),
         offsets,
         fverts,
         fedges,
         edge_verts,
         &nonmanifold,
-    );
+    )
+    .with_ordered_rings();
     let edge_sharpness = edges_old
         .iter()
         .map(|&e| level.edge_sharpness[e as usize])
@@ -175,6 +239,7 @@ pub fn extract_faces(level: &Level, seeds: &[u32], rings: usize) -> (Level, Vec<
         },
         verts_old,
         seed_new,
+        inner,
     )
 }
 

@@ -131,9 +131,16 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
         Topology::from_edges(nv + ne, face_offsets, face_verts, face_edges, edge_verts);
 
     let halves = edge_halves(parent, method);
-    let (edge_sharpness, vertex_sharpness) = child_tags(parent, &halves, &child_topo);
+    let (edge_sharpness, vertex_sharpness) =
+        child_tags(&parent.vertex_sharpness, &halves, &child_topo);
 
-    let vertex_rows = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
+    let vertex_rows = vertex_rows(
+        parent,
+        parent.num_vertices(),
+        &halves,
+        &vertex_sharpness,
+        vertex_mask,
+    );
     let edge_rows = parallel_rows(ne, nv, |e, acc| {
         let [a, b] = topo.edge_verts[e];
         let opp: Vec<u32> = topo

@@ -5,6 +5,7 @@
 //! applying the tables to positions or any other primvar is a separate parallel step, so an
 //! animated mesh re-poses without re-analysis.
 
+mod child_topology;
 pub mod crease;
 pub mod edit;
 pub mod fvar;

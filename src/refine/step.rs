@@ -6,6 +6,7 @@
 //! `n` quads; quad `k` is (child of vertex `k`, edge point of edge `k`, face point, edge point
 //! of edge `k-1`), which is the ptex sub-face convention.
 
+use super::child_topology::{child_topology, prefix_topology};
 use super::crease;
 use super::level::Level;
 use super::rules::{edge_mask, face_mask, vertex_mask, VertexRing};
@@ -94,10 +95,10 @@ pub(super) fn half_edge(topo: &Topology, e: u32, v: u32, lead: bool) -> u32 {
 
 /// The child level's edge and vertex sharpness, for children numbered as both schemes number
 /// them: parent edge `e`'s halves are child edges `2e` and `2e + 1` (sharpness from `halves`,
-/// every other child edge smooth), parent vertex `v`'s child is vertex `v` (its sharpness
-/// decremented, every other child vertex smooth).
+/// every other child edge smooth), parent vertex `v`'s child is vertex `v` (its sharpness,
+/// `parent_vertex_sharpness[v]`, decremented; every other child vertex smooth).
 pub(super) fn child_tags(
-    parent: &Level,
+    parent_vertex_sharpness: &[f32],
     halves: &[[f32; 2]],
     child: &Topology,
 ) -> (Vec<f32>, Vec<f32>) {
@@ -107,7 +108,7 @@ pub(super) fn child_tags(
         edge_sharpness[2 * e + 1] = h[1];
     }
     let mut vertex_sharpness = vec![0.0f32; child.num_vertices];
-    for (c, &s) in vertex_sharpness.iter_mut().zip(&parent.vertex_sharpness) {
+    for (c, &s) in vertex_sharpness.iter_mut().zip(parent_vertex_sharpness) {
         *c = crease::decrement(s);
     }
     (edge_sharpness, vertex_sharpness)
@@ -135,11 +136,12 @@ pub(super) fn edge_halves(parent: &Level, method: CreaseMethod) -> Vec<[f32; 2]>
     halves
 }
 
-/// The stencil rows of the children of every parent vertex (child `v` is row `v`), with the
-/// scheme's vertex `mask`; `halves` from [`edge_halves`], `child_vertex_sharpness` indexed by
-/// parent vertex.
+/// The stencil rows of the children of the first `count` parent vertices (child `v` is row
+/// `v`), with the scheme's vertex `mask`; `halves` from [`edge_halves`],
+/// `child_vertex_sharpness` indexed by parent vertex.
 pub(super) fn vertex_rows(
     parent: &Level,
+    count: usize,
     halves: &[[f32; 2]],
     child_vertex_sharpness: &[f32],
     mask: fn(&mut Accumulator, &VertexRing),
@@ -147,7 +149,7 @@ pub(super) fn vertex_rows(
     let topo = &parent.topo;
     let nv = parent.num_vertices();
     type Scratch<'a> = (Vec<u32>, Vec<f32>, Vec<f32>, Vec<&'a [u32]>);
-    parallel_rows_with(nv, nv, |v, acc, (ends, es, cs, faces): &mut Scratch| {
+    parallel_rows_with(count, nv, |v, acc, (ends, es, cs, faces): &mut Scratch| {
         let edges = topo.vertex_edges(v);
         ends.clear();
         ends.extend(edges.iter().map(|&e| topo.other_vertex(e, v as u32)));
@@ -185,10 +187,33 @@ pub(super) fn vertex_rows(
 
 /// Refines `parent` once under the crease `method`.
 pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
-    let topo = &parent.topo;
-    let nv = parent.num_vertices();
-    let nf = parent.num_faces();
+    refine_inner(parent, parent.num_faces(), method)
+}
+
+/// Refines the first `inner` faces of `parent` once under the crease `method`: the child level
+/// is the refinement of those faces as a mesh of their own (its rim a boundary), while its
+/// stencils read the whole of `parent`, so that the children of vertices and edges whose
+/// neighbourhood lies in `parent` are exact even on that rim. The first `inner` faces' vertices
+/// and edges must be the parent's first ones (as [`crate::patch::local::extract_faces_within`]
+/// numbers a cut-out); the stencil rows read the parent's vertices.
+///
+/// Adaptive refinement cuts two rings of faces out around the faces it isolates, which keeps
+/// every point of the next level exact, but refines only the first ring: the next level's
+/// two rings around the isolated faces' children lie within it.
+pub fn refine_inner(parent: &Level, inner: usize, method: CreaseMethod) -> (Level, StencilTable) {
+    let own;
+    let topo = if inner >= parent.num_faces() {
+        &parent.topo
+    } else {
+        own = prefix_topology(&parent.topo, inner);
+        &own
+    };
+    let nv = topo.num_vertices;
+    let nf = topo.num_faces();
     let ne = topo.num_edges();
+    let child_of_vertex = |v: usize| v as u32;
+    let child_of_face = |f: usize| (nv + f) as u32;
+    let child_of_edge = |e: usize| (nv + nf + e) as u32;
 
     // Child edges, numbered structurally: parent edge e gives 2e (at its first vertex) and
     // 2e + 1 (at its second); corner k of parent face f (face-vertex slot o + k) gives the
@@ -197,14 +222,14 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
     let mut edge_verts = Vec::with_capacity(2 * ne + nfv);
     for e in 0..ne {
         let [a, b] = topo.edge_verts[e];
-        let m = child_of_edge(parent, e);
-        edge_verts.push([child_of_vertex(parent, a as usize), m]);
-        edge_verts.push([m, child_of_vertex(parent, b as usize)]);
+        let m = child_of_edge(e);
+        edge_verts.push([child_of_vertex(a as usize), m]);
+        edge_verts.push([m, child_of_vertex(b as usize)]);
     }
     for f in 0..nf {
-        let cf = child_of_face(parent, f);
+        let cf = child_of_face(f);
         for &e in topo.face_edge_list(f) {
-            edge_verts.push([child_of_edge(parent, e as usize), cf]);
+            edge_verts.push([child_of_edge(e as usize), cf]);
         }
     }
     let half = |e: u32, v: u32, lead: bool| half_edge(topo, e, v, lead);
@@ -223,10 +248,10 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
         for k in 0..n {
             let prev = (k + n - 1) % n;
             face_verts.extend_from_slice(&[
-                child_of_vertex(parent, fv[k] as usize),
-                child_of_edge(parent, fe[k] as usize),
-                child_of_face(parent, f),
-                child_of_edge(parent, fe[prev] as usize),
+                child_of_vertex(fv[k] as usize),
+                child_of_edge(fe[k] as usize),
+                child_of_face(f),
+                child_of_edge(fe[prev] as usize),
             ]);
             face_edges.extend_from_slice(&[
                 half(fe[k], fv[k], true),
@@ -238,21 +263,21 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             face_hole.push(parent.face_hole[f]);
         }
     }
-    let child_topo = Topology::from_edges(
-        nv + nf + ne,
-        face_offsets,
-        face_verts,
-        face_edges,
-        edge_verts,
-    );
+    let child_topo = child_topology(topo, face_offsets, face_verts, face_edges, edge_verts);
 
+    // Sharpness and stencils from the whole parent (its vertices are the stencils' inputs).
     let halves = edge_halves(parent, method);
-    let (edge_sharpness, vertex_sharpness) = child_tags(parent, &halves, &child_topo);
+    let (edge_sharpness, vertex_sharpness) =
+        child_tags(&parent.vertex_sharpness[..nv], &halves[..ne], &child_topo);
+    let topo = &parent.topo;
+    let inputs = parent.num_vertices();
 
     // Stencils: vertex children, face points, edge points.
-    let vertex_rows = vertex_rows(parent, &halves, &vertex_sharpness, vertex_mask);
-    let face_rows = parallel_rows(nf, nv, |f, acc| face_mask(acc, topo.face_vertices(f), 1.0));
-    let edge_rows = parallel_rows_with(ne, nv, |e, acc, faces: &mut Vec<&[u32]>| {
+    let vertex_rows = vertex_rows(parent, nv, &halves, &vertex_sharpness, vertex_mask);
+    let face_rows = parallel_rows(nf, inputs, |f, acc| {
+        face_mask(acc, topo.face_vertices(f), 1.0)
+    });
+    let edge_rows = parallel_rows_with(ne, inputs, |e, acc, faces: &mut Vec<&[u32]>| {
         let [a, b] = topo.edge_verts[e];
         faces.clear();
         faces.extend(
@@ -271,7 +296,7 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
             parent.smooth_triangles,
         );
     });
-    let table = StencilTable::concat(nv, [&vertex_rows, &face_rows, &edge_rows]);
+    let table = StencilTable::concat(inputs, [&vertex_rows, &face_rows, &edge_rows]);
 
     (
         Level {

@@ -10,7 +10,7 @@ use super::{Patch, PatchKind, PatchOptions, PatchStats, PatchTable, MAX_LEVEL};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, Options, Scheme};
 use crate::patch::approx::{Approximation, QuadApprox, TriApprox};
-use crate::patch::local::{child_face, extract_faces};
+use crate::patch::local::{child_face, extract_faces, extract_faces_within};
 use crate::patch::regular::{classify, RegularKind};
 use crate::patch::stam;
 use crate::patch::LoopSurface;
@@ -472,8 +472,10 @@ impl PatchTable {
         let mut depth = 0;
         while !pending.is_empty() {
             let seeds: Vec<u32> = pending.iter().map(|p| p.0).collect();
-            let (sub, old, seed_new) = extract_faces(&level, &seeds, 2);
-            let (mut child, t) = step::refine(&sub, method);
+            // Two rings around the seeds support the stencils; the first is refined (its
+            // children hold the next level's two rings around the seeds' children).
+            let (sub, old, seed_new, inner) = extract_faces_within(&level, &seeds, 2);
+            let (mut child, t) = step::refine_inner(&sub, inner, method);
             // Follow each edit's path one level down; apply the edits that act here.
             let mut edits_here = Vec::new();
             let seed_of: std::collections::HashMap<u32, usize> = if tracks.is_empty() {
