@@ -38,6 +38,11 @@ pub const MAX_VALENCE: usize = 50;
 /// its exact limit position (as on-demand subdivision does).
 pub const MAX_DEPTH: usize = 60;
 
+/// Levels tabulated when the matrices are built; deeper ones, which only points within
+/// 2^-8 of the patch of the extraordinary corner need (dicing rates above 256, or queries
+/// at arbitrary points), on first use.
+const SHALLOW: usize = 8;
+
 /// The tabulated matrices of one valence.
 #[derive(Debug)]
 pub struct StamBasis {
@@ -45,10 +50,13 @@ pub struct StamBasis {
     pub valence: usize,
     /// Number of control points, `2n + 8`.
     pub size: usize,
-    /// `W[m][q]` for `m = 1..=MAX_DEPTH`, `q = 1..=3`, transposed: for each control point
+    /// `W[m][q]` for `m = 1..=SHALLOW`, `q = 1..=3`, transposed: for each control point
     /// `i`, its 16 weights (one per patch point), at `((m − 1)·3 + q − 1)·16·size + 16 i`
     /// (this order lets the product run over 16 independent sums, which vectorise).
     weights: Vec<f64>,
+    /// The same for `m = SHALLOW + 1..=MAX_DEPTH` (from `m = SHALLOW + 1`), tabulated on
+    /// first use by continuing the products (the same bits as tabulating them at once).
+    deep: OnceLock<Vec<f64>>,
     /// Limit position of the extraordinary vertex as weights over the control points.
     limit: Vec<f64>,
     /// The configuration's faces over the control points, as [`gather`] visits them.
@@ -56,6 +64,44 @@ pub struct StamBasis {
     /// `A`, row-major `size × size`: one step maps the control points to those of the child
     /// quad at the extraordinary corner.
     step: Vec<f64>,
+}
+
+/// Appends the transposed weights of levels `depths` ([`StamBasis::weights`]) from `cur`, the
+/// 16 rows of each `q` at the first of them, multiplying the rows by `step` (`A`) after each
+/// level below [`MAX_DEPTH`].
+fn tabulate(
+    weights: &mut Vec<f64>,
+    cur: &mut [Vec<Vec<f64>>],
+    step: &[f64],
+    depths: std::ops::RangeInclusive<usize>,
+) {
+    let size = step.len().isqrt();
+    let mut next = vec![0.0; size];
+    for m in depths {
+        for rows in cur.iter_mut() {
+            for i in 0..size {
+                weights.extend(rows.iter().map(|r| r[i]));
+            }
+            if m < MAX_DEPTH {
+                for r in rows.iter_mut() {
+                    times_step(r, step, &mut next);
+                }
+            }
+        }
+    }
+}
+
+/// `r ← r · A` for `A` = `step` (row-major, `r.len()` square), through `next`.
+fn times_step(r: &mut [f64], step: &[f64], next: &mut [f64]) {
+    next.iter_mut().for_each(|x| *x = 0.0);
+    for (&ri, arow) in r.iter().zip(step.chunks_exact(r.len())) {
+        if ri != 0.0 {
+            for (x, &aij) in next.iter_mut().zip(arow) {
+                *x += ri * aij;
+            }
+        }
+    }
+    r.copy_from_slice(next);
 }
 
 /// Walks the quads around vertex `v`, starting with face `f`, crossing each face's edge that
@@ -232,7 +278,7 @@ impl StamBasis {
             r
         };
         let a: Vec<Vec<f64>> = g1.iter().map(|&v| row_of(v)).collect();
-        let mut weights = Vec::with_capacity(MAX_DEPTH * 3 * 16 * size);
+        let mut weights = Vec::with_capacity(SHALLOW * 3 * 16 * size);
         let mut cur: Vec<Vec<Vec<f64>>> = (1..4)
             .map(|q| {
                 let (kind, cps) = classify(&s1, child_face(&s0, 0, q), false)
@@ -252,27 +298,8 @@ impl StamBasis {
             })
             .collect();
         // Level m needs B_q A^(m-1): store, then multiply by A for the next level.
-        let mut next = vec![0.0; size];
-        for m in 1..=MAX_DEPTH {
-            for rows in &mut cur {
-                for i in 0..size {
-                    weights.extend(rows.iter().map(|r| r[i]));
-                }
-                for r in rows.iter_mut() {
-                    if m < MAX_DEPTH {
-                        next.iter_mut().for_each(|x| *x = 0.0);
-                        for (&ri, arow) in r.iter().zip(&a) {
-                            if ri != 0.0 {
-                                for (x, &aij) in next.iter_mut().zip(arow) {
-                                    *x += ri * aij;
-                                }
-                            }
-                        }
-                        r.copy_from_slice(&next);
-                    }
-                }
-            }
-        }
+        let step = a.concat();
+        tabulate(&mut weights, &mut cur, &step, 1..=SHALLOW);
         let [pos, _, _] = vertex_limit_masks(&s0, 0, CreaseMethod::Uniform);
         let mut limit = vec![0.0; size];
         for (v, w) in pos {
@@ -282,10 +309,52 @@ impl StamBasis {
             valence: n,
             size,
             weights,
+            deep: OnceLock::new(),
             limit,
             faces,
-            step: a.concat(),
+            step,
         }
+    }
+
+    /// The transposed weights `W[m][q]` (see [`StamBasis::weights`]), `m` in
+    /// `1..=MAX_DEPTH`, `q` in `1..=3`.
+    fn weights_at(&self, m: usize, q: usize) -> &[f64] {
+        let k = self.size;
+        let (table, m) = if m <= SHALLOW {
+            (&self.weights, m)
+        } else {
+            (self.deep.get_or_init(|| self.deeper()), m - SHALLOW)
+        };
+        &table[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k]
+    }
+
+    /// The 16 rows of `W[m][q]` for each `q` (untransposed), `m` in `1..=SHALLOW`.
+    fn rows_at(&self, m: usize) -> Vec<Vec<Vec<f64>>> {
+        let k = self.size;
+        (1..4)
+            .map(|q| {
+                let w = &self.weights[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k];
+                (0..16)
+                    .map(|p| (0..k).map(|i| w[16 * i + p]).collect())
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The weights of levels `SHALLOW + 1..=MAX_DEPTH`: the products continued from level
+    /// `SHALLOW`'s rows.
+    fn deeper(&self) -> Vec<f64> {
+        let k = self.size;
+        let mut cur = self.rows_at(SHALLOW);
+        let mut next = vec![0.0; k];
+        for rows in &mut cur {
+            for r in rows.iter_mut() {
+                times_step(r, &self.step, &mut next);
+            }
+        }
+        let mut deep = Vec::with_capacity((MAX_DEPTH - SHALLOW) * 3 * 16 * k);
+        tabulate(&mut deep, &mut cur, &self.step, SHALLOW + 1..=MAX_DEPTH);
+        deep
     }
 
     /// The control points of the child quad at the extraordinary corner (`A · cps`): the
@@ -308,8 +377,7 @@ impl StamBasis {
 
     /// The 16 control points of the regular patch `q` (1..=3) at level `m` (1..=MAX_DEPTH).
     pub(crate) fn grid(&self, m: usize, q: usize, cps: &[[f64; 3]]) -> ControlGrid {
-        let k = self.size;
-        let w = &self.weights[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k];
+        let w = self.weights_at(m, q);
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX (checked just above).
@@ -568,6 +636,32 @@ mod tests {
     /// Valences checked: every small one and a few large ones.
     const VALENCES: [usize; 13] = [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 16, 24, 50];
 
+    /// The levels tabulated on first use are those of one run of products from level 1, bit
+    /// for bit (the rows at level 1 continued to `MAX_DEPTH` at once).
+    #[test]
+    fn deep_levels_are_the_products_continued() {
+        for n in [3, 5, 7, 16] {
+            let b = StamBasis::new(n);
+            let k = b.size;
+            assert!(b.deep.get().is_none(), "deep levels tabulated early");
+            let mut cur = b.rows_at(1);
+            let mut all = Vec::new();
+            tabulate(&mut all, &mut cur, &b.step, 1..=MAX_DEPTH);
+            for m in 1..=MAX_DEPTH {
+                for q in 1..4 {
+                    let want = &all[((m - 1) * 3 + q - 1) * 16 * k..][..16 * k];
+                    let got = b.weights_at(m, q);
+                    assert!(
+                        got.iter()
+                            .zip(want)
+                            .all(|(x, y)| x.to_bits() == y.to_bits()),
+                        "valence {n}, level {m}, sub-patch {q}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn basis_is_affine_and_closed() {
         for n in VALENCES {
@@ -578,7 +672,8 @@ mod tests {
             assert_eq!(b.size, 2 * n + 8);
             // Subdivision reproduces constants: every row of W[m][q] and the limit mask sum
             // to 1 (to rounding accumulated over 60 products of K terms).
-            for block in b.weights.chunks_exact(16 * b.size) {
+            let blocks = (1..=MAX_DEPTH).flat_map(|m| (1..4).map(move |q| (m, q)));
+            for block in blocks.map(|(m, q)| b.weights_at(m, q)) {
                 for p in 0..16 {
                     let row: Vec<f64> = (0..b.size).map(|i| block[16 * i + p]).collect();
                     let sum: f64 = row.iter().sum();
