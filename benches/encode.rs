@@ -1,11 +1,11 @@
 //! Criterion benchmark of the grid core's octahedral normal encoding
-//! ([`limitray::grid::oct::oct_encode`] one by one, and [`limitray::grid::oct::oct_encode_all`]
+//! ([`limitray::oct::oct_encode`] one by one, and [`limitray::oct::oct_encode_all`]
 //! as the grid build calls it): 4096 random unit normals per iteration, as the grid build
 //! encodes one per stored vertex. `cargo bench --bench encode` takes a few seconds.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use limitray::grid::oct::{oct_encode, oct_encode_all};
 use limitray::harness::rng::SplitMix64;
+use limitray::oct::{oct_encode, oct_encode_all};
 use std::hint::black_box;
 use std::time::Duration;
 

@@ -37,6 +37,7 @@ pub mod lines;
 pub mod memory;
 pub mod mesh;
 pub mod numeric;
+pub mod oct;
 pub mod patch;
 pub mod refine;
 #[cfg(feature = "render")]

@@ -19,6 +19,7 @@
 
 pub mod displace;
 pub mod estimate;
+mod normals;
 mod pattern;
 mod rates;
 
@@ -30,10 +31,13 @@ pub use rates::{edge_rates, DiceRate, Rates, ScreenRate};
 use crate::coord::FaceCoord;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
+use crate::oct::oct_encode_all;
+use crate::patch::bspline::PointD1;
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
-use crate::vec3::{cross, dot, norm, sub};
+use crate::vec3::{norm, sub};
+use normals::unit_normal;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap as HashMap;
 
@@ -317,29 +321,6 @@ fn limit_frame(table: &PatchTable, at: FaceCoord) -> Result<(crate::patch::Sampl
     Ok((s, n))
 }
 
-/// The unit normal at `at` of the surface whose derivatives there are `du`, `dv`. Where the
-/// parametric normal vanishes (corners of boundary faces, crease ends), the normal is taken a
-/// little inside the domain.
-fn unit_normal(table: &PatchTable, at: FaceCoord, du: [f64; 3], dv: [f64; 3]) -> Result<[f64; 3]> {
-    let mut n = cross(du, dv);
-    // `|n| > 1e-10 |du| |dv|` for sure, without the two square roots, when the squares clear
-    // it by a relative 1e-12 (rounding moves either side by a few 1e-16) in the normal range;
-    // otherwise the test as stated decides.
-    let (n2, bound) = (dot(n, n), 1e-20 * dot(du, du) * dot(dv, dv));
-    let clear = bound.is_normal() && n2.is_normal() && n2 > bound * (1.0 + 1e-12);
-    if !clear && (norm(n).is_nan() || norm(n) <= 1e-10 * (norm(du) * norm(dv))) {
-        let (u2, v2) = (at.u + (0.5 - at.u) * 1e-4, at.v + (0.5 - at.v) * 1e-4);
-        let s2 = table.eval_d1(FaceCoord::new(at.face, at.k, u2, v2))?;
-        n = cross(s2.du, s2.dv);
-    }
-    let l = norm(n);
-    Ok(if l > 0.0 && l.is_finite() {
-        [n[0] / l, n[1] / l, n[2] / l]
-    } else {
-        [0.0, 0.0, 1.0]
-    })
-}
-
 /// Evaluates position and unit normal at `(face, k, u, v)` ([`limit_frame`]), displaced if
 /// asked.
 fn eval_point(
@@ -427,7 +408,7 @@ pub fn estimate_size(
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
 /// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
-    dice_with(table, mesh, opts, false).map(|(d, _)| d)
+    dice_with(table, mesh, opts, false).map(|(d, _, _)| d)
 }
 
 /// A diced surface for the grid core alone ([`crate::grid::GridMesh::build_lean`]): what
@@ -442,6 +423,9 @@ pub struct LeanDiced {
     /// Per triangle, the level of the grid triangles of regions without a
     /// [`GridRegion::level`] (others are 0).
     pub(crate) levels: Vec<u8>,
+    /// Per point, its normal's octahedral code ([`crate::oct::oct_encode`] of the
+    /// normal [`dice`] gives it), in place of [`DicedMesh::normals`] (left empty).
+    pub(crate) codes: Vec<u32>,
 }
 
 impl LeanDiced {
@@ -480,17 +464,22 @@ impl LeanDiced {
 
 /// Dices as [`dice`] does, for [`crate::grid::GridMesh::build_lean`] ([`LeanDiced`]).
 pub fn dice_lean(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<LeanDiced> {
-    dice_with(table, mesh, opts, true).map(|(mesh, levels)| LeanDiced { mesh, levels })
+    dice_with(table, mesh, opts, true).map(|(mesh, levels, codes)| LeanDiced {
+        mesh,
+        levels,
+        codes,
+    })
 }
 
-/// [`dice`]; with `lean`, without the parameters and records [`LeanDiced`] leaves out, and
-/// with its grid triangles' levels apart (empty otherwise).
+/// [`dice`]; with `lean`, without the parameters and records [`LeanDiced`] leaves out, with its
+/// grid triangles' levels apart, and with the normals as octahedral codes (both empty
+/// otherwise).
 fn dice_with(
     table: &PatchTable,
     mesh: &ControlMesh,
     opts: &DiceOptions,
     lean: bool,
-) -> Result<(DicedMesh, Vec<u8>)> {
+) -> Result<(DicedMesh, Vec<u8>, Vec<u32>)> {
     let (level, _) = Level::base(mesh, &table.mesh_options)?;
     if table.num_faces() != level.num_faces() {
         return Err(Error::new(
@@ -578,15 +567,30 @@ fn dice_with(
             }
         }
     }
-    // Evaluated in place (collecting results would gather per-thread pieces and copy them).
+    // Evaluated in place (collecting results would gather per-thread pieces and copy them),
+    // in runs whose normals are found at once.
     let mut points = vec![Point::default(); jobs.len()];
+    const RUN: usize = 256;
     points
-        .par_iter_mut()
-        .zip(&jobs)
-        .with_min_len(256)
-        .try_for_each(|(p, &(f, k, u, v))| {
-            *p = eval_point(table, displacer.as_ref(), f, k, u, v)?;
-            Ok::<_, Error>(())
+        .par_chunks_mut(RUN)
+        .zip(jobs.par_chunks(RUN))
+        .try_for_each_init(LatticeScratch::default, |scratch, (out, jobs)| {
+            let at = |i: usize| {
+                let (f, k, u, v) = jobs[i];
+                FaceCoord::new(f, k, u, v)
+            };
+            if displacer.is_some() {
+                for (i, p) in out.iter_mut().enumerate() {
+                    let FaceCoord { face, k, u, v } = at(i);
+                    *p = eval_point(table, displacer.as_ref(), face, k, u, v)?;
+                }
+                return Ok(());
+            }
+            scratch.points.clear();
+            for i in 0..jobs.len() {
+                scratch.points.push(table.eval_d1(at(i))?);
+            }
+            scratch.finish(table, at, |i, q| out[i] = q)
         })?;
     let shared = Shared {
         points,
@@ -637,7 +641,7 @@ fn dice_with(
     }
     let mut out = DicedMesh {
         positions: vec![[0.0; 3]; total_points],
-        normals: vec![[0.0; 3]; total_points],
+        normals: vec![[0.0; 3]; if lean { 0 } else { total_points }],
         // Zeroed allocations (every page is first touched by the domain that writes it, in
         // parallel; `vec![x; n]` of a struct writes every element here, sequentially).
         params: if lean {
@@ -651,17 +655,32 @@ fn dice_with(
         grid_frames: vec![0; sizes.iter().map(|z| z.frame).sum()],
     };
     let mut levels = vec![0u8; if lean { total_tris } else { 0 }];
+    let mut codes = vec![0u32; if lean { total_points } else { 0 }];
     for (i, q) in shared.points.iter().enumerate() {
         out.positions[i] = q.p;
-        out.normals[i] = q.n;
+        if let Some(slot) = out.normals.get_mut(i) {
+            *slot = q.n;
+        }
         if let Some(slot) = out.params.get_mut(i) {
             *slot = q.param;
         }
     }
+    if lean {
+        let n = shared.points.len();
+        codes[..n]
+            .par_chunks_mut(4096)
+            .zip(shared.points.par_chunks(4096))
+            .for_each(|(c, q)| {
+                let normals: Vec<[f32; 3]> = q.iter().map(|q| q.n).collect();
+                oct_encode_all(&normals, c);
+            });
+    }
     let mut jobs = Vec::with_capacity(domains.len());
     {
         let n = shared.points.len();
-        let (mut positions, mut normals) = (&mut out.positions[n..], &mut out.normals[n..]);
+        let mut positions = &mut out.positions[n..];
+        let mut normals = out.normals.get_mut(n..).unwrap_or_default();
+        let mut point_codes = codes.get_mut(n..).unwrap_or_default();
         let mut params = out.params.get_mut(n..).unwrap_or_default();
         let (mut triangles, mut tri_info) = (&mut out.triangles[..], &mut out.tri_info[..]);
         let mut tri_levels = &mut levels[..];
@@ -682,7 +701,7 @@ fn dice_with(
             let slices = DomainSlices {
                 base,
                 positions: split_off(&mut positions, z.points),
-                normals: split_off(&mut normals, z.points),
+                normals: split_off(&mut normals, if lean { 0 } else { z.points }),
                 params: split_off(&mut params, if lean { 0 } else { z.points }),
                 triangles: split_off(&mut triangles, z.triangles),
                 tri_info: split_off(&mut tri_info, z.triangles),
@@ -692,15 +711,29 @@ fn dice_with(
             base += z.points as u32;
             first_triangle += z.triangles as u32;
             first_frame += z.frame as u32;
-            jobs.push((f, k, slices));
+            let codes = split_off(&mut point_codes, if lean { z.points } else { 0 });
+            jobs.push((f, k, slices, codes));
         }
     }
-    jobs.into_par_iter()
-        .with_min_len(64)
-        .try_for_each_init(HashMap::default, |cache, (f, k, slices)| {
-            ctx.domain(f as usize, k as usize, cache, slices)
-        })?;
-    Ok((out, levels))
+    jobs.into_par_iter().with_min_len(64).try_for_each_init(
+        || (Scratch::default(), Vec::new()),
+        |(scratch, normals), (f, k, slices, codes)| {
+            if !lean {
+                return ctx.domain(f as usize, k as usize, scratch, slices);
+            }
+            // Lean: the normals in a buffer of the worker's, then encoded at once.
+            normals.clear();
+            normals.resize(codes.len(), [0.0; 3]);
+            let slices = DomainSlices {
+                normals: &mut normals[..],
+                ..slices
+            };
+            ctx.domain(f as usize, k as usize, scratch, slices)?;
+            oct_encode_all(normals, codes);
+            Ok(())
+        },
+    )?;
+    Ok((out, levels, codes))
 }
 
 /// The first `n` items of `rest`, which keeps the others.
@@ -750,6 +783,38 @@ impl DomainSlices<'_> {
         if let Some(slot) = self.params.get_mut(i) {
             *slot = q.param;
         }
+    }
+}
+
+/// What a worker keeps from domain to domain: the stitch patterns by side rates, and the
+/// buffers of a lattice's points and normals.
+#[derive(Default)]
+struct Scratch {
+    patterns: HashMap<[u32; 4], Pattern>,
+    lattice: LatticeScratch,
+}
+
+/// A run of evaluated points (a domain's lattice, or shared points) and their unit normals.
+#[derive(Default)]
+struct LatticeScratch {
+    points: Vec<PointD1>,
+    normals: Vec<[f64; 3]>,
+}
+
+impl LatticeScratch {
+    /// The diced points of [`Self::points`], the `i`-th at `at(i)`: their unit normals found at
+    /// once ([`normals::unit_normals`]), then `put(i, point)`, rounded ([`rounded`]).
+    fn finish(
+        &mut self,
+        table: &PatchTable,
+        at: impl Fn(usize) -> FaceCoord,
+        mut put: impl FnMut(usize, Point),
+    ) -> Result<()> {
+        normals::unit_normals(table, &self.points, &at, &mut self.normals)?;
+        for (i, (pt, &n)) in self.points.iter().zip(&self.normals).enumerate() {
+            put(i, rounded(at(i), pt.p, n)?);
+        }
+        Ok(())
     }
 }
 
@@ -831,7 +896,8 @@ impl DomainCtx<'_> {
         f: usize,
         k: usize,
         pat: &Pattern,
-        mut put: impl FnMut(usize, Point),
+        scratch: &mut LatticeScratch,
+        put: impl FnMut(usize, Point),
     ) -> Result<bool> {
         if self.displace.is_some() || pat.interior.is_empty() {
             return Ok(false);
@@ -839,24 +905,20 @@ impl DomainCtx<'_> {
         let nu = pat.rates[0].max(pat.rates[2]);
         let nv = pat.rates[1].max(pat.rates[3]);
         debug_assert_eq!(pat.interior.len(), ((nu - 1) * (nv - 1)) as usize);
-        let mut i = 0;
-        let mut failed = None;
-        let done = self.table.eval_domain_lattice(f, k, nu, nv, |pt| {
-            if failed.is_some() {
-                return;
-            }
-            let [u, v] = pat.interior[i];
-            let at = FaceCoord::new(f as u32, k as u32, u, v);
-            match unit_normal(self.table, at, pt.du, pt.dv).and_then(|n| rounded(at, pt.p, n)) {
-                Ok(q) => put(i, q),
-                Err(e) => failed = Some(e),
-            }
-            i += 1;
-        });
-        match failed {
-            Some(e) => Err(e),
-            None => Ok(done),
+        let pts = &mut scratch.points;
+        pts.clear();
+        if !self
+            .table
+            .eval_domain_lattice(f, k, nu, nv, |pt| pts.push(pt))
+        {
+            return Ok(false);
         }
+        let at = |i: usize| {
+            let [u, v] = pat.interior[i];
+            FaceCoord::new(f as u32, k as u32, u, v)
+        };
+        scratch.finish(self.table, at, put)?;
+        Ok(true)
     }
 
     /// The points of the four sides of domain `(f, k)`, each from its start to its end.
@@ -916,12 +978,13 @@ impl DomainCtx<'_> {
         &self,
         f: usize,
         k: usize,
-        cache: &mut HashMap<[u32; 4], Pattern>,
+        scratch: &mut Scratch,
         mut out: DomainSlices,
     ) -> Result<()> {
         let sides = self.sides(f, k);
         let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
-        let pat = cache.entry(rates).or_insert_with(|| pattern(rates));
+        let Scratch { patterns, lattice } = scratch;
+        let pat = patterns.entry(rates).or_insert_with(|| pattern(rates));
         let ring = pat.ring_len();
         // Map pattern indices to vertex indices.
         let mut map: Vec<u32> = Vec::with_capacity(ring + pat.interior.len());
@@ -954,7 +1017,7 @@ impl DomainCtx<'_> {
         for (slot, &i) in out.frame.iter_mut().zip(&pat.grid_frame) {
             *slot = global(map[i as usize]);
         }
-        if !self.lattice(f, k, pat, |i, q| out.put(first + i, q))? {
+        if !self.lattice(f, k, pat, lattice, |i, q| out.put(first + i, q))? {
             for (i, &[u, v]) in pat.interior.iter().enumerate() {
                 let q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
                 out.put(first + i, q);

@@ -258,7 +258,7 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
     // corners, decoded as the CPU's hit records decode them.
     let mut normals = Vec::new();
     let decoded = |w: &mut Vec<u32>, code: u32| {
-        let n = crate::grid::oct::oct_decode(code);
+        let n = crate::oct::oct_decode(code);
         w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
     };
     for m in &world.scene.meshes {

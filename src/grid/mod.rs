@@ -2,7 +2,7 @@
 //!
 //! Each diced domain's regular grid ([`crate::dice::GridRegion`]) is cut into blocks of at
 //! most 8×8 quads ([`block`]). A block stores its vertices once, as `f32` planes, with
-//! octahedral normals ([`oct`]); its hierarchy is implicit (quadrants, then 2×2-quad
+//! octahedral normals ([`crate::oct`]); its hierarchy is implicit (quadrants, then 2×2-quad
 //! windows, boxes in [`node::Box4`]), and its leaf test runs on the eight triangles of a
 //! window at once ([`window`]). The triangles outside the grids (zippers between different
 //! rates, tiny domains) are *loose* triangles with their own records, grouped into strips of
@@ -22,7 +22,6 @@
 pub mod block;
 pub mod collapse;
 pub mod node;
-pub mod oct;
 pub mod top;
 pub mod window;
 
@@ -31,9 +30,9 @@ use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{split_off, DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
+use crate::oct::{oct_decode, oct_encode_all};
 use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
-use oct::{oct_decode, oct_encode_all};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
@@ -271,20 +270,25 @@ impl GridMesh {
     /// normals, boxes and levels region by region, as the blocks were planned. Fails when the
     /// mesh needs more than 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
     pub fn build(d: &DicedMesh) -> Result<GridMesh> {
-        Self::build_from(d, None)
+        Self::build_from(d, None, None)
     }
 
     /// [`Self::build`] from a lean dicing ([`crate::dice::dice_lean`]): the same grid mesh,
     /// from less memory.
     pub fn build_lean(d: &LeanDiced) -> Result<GridMesh> {
-        Self::build_from(&d.mesh, Some(&d.levels))
+        Self::build_from(&d.mesh, Some(&d.levels), Some(&d.codes))
     }
 
-    /// [`Self::build`], reading of `d` only what a [`LeanDiced`] holds: positions, normals,
-    /// grid regions and their frames, and the corners and records of loose triangles; the
-    /// levels of grid triangles in regions without a [`GridRegion::level`] from `tri_levels`
-    /// when given (a lean dicing's), else from their records.
-    fn build_from(d: &DicedMesh, tri_levels: Option<&[u8]>) -> Result<GridMesh> {
+    /// [`Self::build`], reading of `d` only what a [`LeanDiced`] holds: positions, grid
+    /// regions and their frames, and the corners and records of loose triangles; the levels of
+    /// grid triangles in regions without a [`GridRegion::level`] from `tri_levels` when given
+    /// (a lean dicing's), else from their records; the normals' octahedral codes from
+    /// `normal_codes` when given (a lean dicing's), else encoded from `d`'s normals.
+    fn build_from(
+        d: &DicedMesh,
+        tri_levels: Option<&[u8]>,
+        normal_codes: Option<&[u32]>,
+    ) -> Result<GridMesh> {
         // Plan the blocks (headers, then their offsets in region order), store each in place,
         // in parallel, and take its bounds from its root box; the top level is built over
         // those bounds and only the headers are then put in its order.
@@ -311,11 +315,19 @@ impl GridMesh {
         }
         // Each vertex's octahedral normal, encoded once (a block border's vertices are held by
         // two or four blocks, a loose triangle's corners by several triangles).
-        let mut codes = vec![0u32; d.normals.len()];
-        codes
-            .par_chunks_mut(4096)
-            .zip(d.normals.par_chunks(4096))
-            .for_each(|(c, n)| oct_encode_all(n, c));
+        let encoded;
+        let codes = match normal_codes {
+            Some(codes) => codes,
+            None => {
+                let mut codes = vec![0u32; d.normals.len()];
+                codes
+                    .par_chunks_mut(4096)
+                    .zip(d.normals.par_chunks(4096))
+                    .for_each(|(c, n)| oct_encode_all(n, c));
+                encoded = codes;
+                &encoded[..]
+            }
+        };
         let mut m = GridMesh {
             triangles: d.triangles.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
@@ -345,7 +357,7 @@ impl GridMesh {
                 jobs.push((p, out));
             }
             jobs.into_par_iter().with_min_len(16).for_each(|(p, out)| {
-                p.header.root = fill_block(d, tri_levels, &codes, p, out);
+                p.header.root = fill_block(d, tri_levels, codes, p, out);
             });
         }
         // Each block's bounds: the union of its root's children (absent ones are empty).

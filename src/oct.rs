@@ -21,7 +21,7 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
     let (qx, qy) = (q(x), q(y));
     let (qx1, qy1) = ((qx + 1).min(65535), (qy + 1).min(65535));
     #[cfg(target_arch = "x86_64")]
-    if super::window::has_avx2() {
+    if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 is present (detected).
         return unsafe { oct_best_avx2(n, [qx, qx1], [qy, qy1]) };
     }
@@ -37,7 +37,7 @@ const LANES: usize = 8;
 pub fn oct_encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
     assert_eq!(normals.len(), codes.len(), "one code per normal");
     #[cfg(target_arch = "x86_64")]
-    if super::window::has_avx2() {
+    if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 is present (detected).
         return unsafe { encode_all_avx2(normals, codes) };
     }
@@ -386,7 +386,7 @@ mod tests {
                         let (xq, yq) = ([x0, (x0 + 1).min(65535)], [y0, (y0 + 1).min(65535)]);
                         let scalar = oct_best(n, xq, yq);
                         #[cfg(target_arch = "x86_64")]
-                        if crate::grid::window::has_avx2() {
+                        if std::arch::is_x86_feature_detected!("avx2") {
                             // SAFETY: AVX2 is present (detected).
                             assert_eq!(unsafe { oct_best_avx2(n, xq, yq) }, scalar, "{n:?}");
                         }
