@@ -399,10 +399,11 @@ pub fn estimate_size(
     mesh: &ControlMesh,
     opts: &DiceOptions,
 ) -> Result<DiceEstimate> {
-    let (level, _) = Level::base(mesh, &table.mesh_options)?;
+    let mut built = None;
+    let level = table.base_level_of(mesh, &mut built)?;
     let displacer = DisplacedSurface::of(opts, table, mesh)?;
-    let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
-    Ok(estimate::estimate(&level, &rates))
+    let rates = rates::rates_for(table, level, opts, displacer.as_ref())?;
+    Ok(estimate::estimate(level, &rates))
 }
 
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
@@ -480,7 +481,10 @@ fn dice_with(
     opts: &DiceOptions,
     lean: bool,
 ) -> Result<(DicedMesh, Vec<u8>, Vec<u32>)> {
-    let (level, _) = Level::base(mesh, &table.mesh_options)?;
+    // The table's level 0 where it kept it (building it again took 34 ms of the 316² grid's
+    // 242 ms of dicing).
+    let mut built = None;
+    let level = table.base_level_of(mesh, &mut built)?;
     if table.num_faces() != level.num_faces() {
         return Err(Error::new(
             ErrorKind::Usage,
@@ -490,10 +494,10 @@ fn dice_with(
     let topo = &level.topo;
     let live = |f: usize| !level.face_hole[f];
     let displacer = DisplacedSurface::of(opts, table, mesh)?;
-    let rates = rates::rates_for(table, &level, opts, displacer.as_ref())?;
+    let rates = rates::rates_for(table, level, opts, displacer.as_ref())?;
     crate::memory::check(
         "dicing",
-        estimate::estimate(&level, &rates).bytes(),
+        estimate::estimate(level, &rates).bytes(),
         "lower the dicing rate (--rate, or the scene's rate, max_rate or pixels_per_edge)",
     )?;
 
@@ -611,7 +615,7 @@ fn dice_with(
         .collect();
     let ctx = DomainCtx {
         table,
-        level: &level,
+        level,
         rates: &rates,
         shared: &shared,
         sharp_edge: &sharp_edge,
@@ -621,14 +625,13 @@ fn dice_with(
     };
     // Sizes first (patterns only, nothing evaluated), so that every domain then writes its
     // points and triangles in place, in parallel, with no per-domain buffers to copy.
+    // Patterns by side rates cached per worker (a cache per chunk of domains made each chunk
+    // build its patterns again: 1,560 times on a 316² grid).
     let sizes: Vec<DomainSize> = domains
-        .par_chunks(64)
-        .flat_map_iter(|chunk| {
-            let mut cache = HashMap::default();
-            chunk
-                .iter()
-                .map(|&(f, k)| ctx.domain_size(f as usize, k as usize, &mut cache))
-                .collect::<Vec<_>>()
+        .par_iter()
+        .with_min_len(64)
+        .map_init(HashMap::default, |cache, &(f, k)| {
+            ctx.domain_size(f as usize, k as usize, cache)
         })
         .collect();
     let total_points = shared.points.len() + sizes.iter().map(|z| z.points).sum::<usize>();

@@ -412,6 +412,7 @@ impl PatchTable {
             loop_surface: None,
             approx: None,
             quad_approx: None,
+            base_level: None,
         };
         if options.scheme == Scheme::Loop {
             // A Loop mesh's surface is its own evaluator; each triangle is three sub-quads
@@ -467,14 +468,15 @@ impl PatchTable {
         settled.sort_by_key(|p| p.0);
         let mut pending = settled;
         // Refine what is irregular, level by level, on the union of two-ring neighbourhoods.
-        let mut level = base;
+        let mut refined: Option<Level> = None;
         let mut total = nb as u32;
         let mut depth = 0;
         while !pending.is_empty() {
+            let level = refined.as_ref().unwrap_or(&base);
             let seeds: Vec<u32> = pending.iter().map(|p| p.0).collect();
             // Two rings around the seeds support the stencils; the first is refined (its
             // children hold the next level's two rings around the seeds' children).
-            let (sub, old, seed_new, inner) = extract_faces_within(&level, &seeds, 2);
+            let (sub, old, seed_new, inner) = extract_faces_within(level, &seeds, 2);
             let (mut child, t) = step::refine_inner(&sub, inner, method);
             // Follow each edit's path one level down; apply the edits that act here.
             let mut edits_here = Vec::new();
@@ -538,8 +540,13 @@ impl PatchTable {
             if !caps.is_empty() {
                 table.settle_caps(&child, child_offset, &caps, depth);
             }
-            level = child;
+            refined = Some(child);
             pending = next;
+        }
+        drop(refined);
+        // Dicing reads level 0 too: kept unless edits at level 0 changed its tags or holes.
+        if mesh.edits.iter().all(|e| e.level() > 0) {
+            table.base_level = Some(std::sync::Arc::new(base));
         }
         table.point_stencils.num_inputs = total as usize;
         // Patches per kind and level, counted once here (not a string key per leaf).

@@ -190,6 +190,10 @@ pub struct PatchTable {
     /// Under Catmull-Clark with `--surface gregory`, paper 004's Gregory patches: `eval` is
     /// [`crate::patch::approx::QuadApprox::eval`].
     quad_approx: Option<std::sync::Arc<crate::patch::approx::QuadApprox>>,
+    /// The control mesh's level 0 the table was built on (topology and tags), kept so that
+    /// dicing need not build it again; `None` when edits at level 0 changed the table's copy,
+    /// and under the Loop scheme.
+    base_level: Option<std::sync::Arc<crate::refine::Level>>,
 }
 
 /// A limit-surface sample.
@@ -212,30 +216,50 @@ pub struct Sample {
 }
 
 impl PatchTable {
-    /// Bytes used by the table (stencils, patches, tree, end-cap topology; not the levels that
-    /// end caps refine lazily when queries reach them, nor the shared Stam matrices).
+    /// Level 0 of `mesh` as this table was built on it, when the table kept it (see
+    /// `base_level`) and `mesh` has the table's numbers of faces and vertices; else built
+    /// again.
+    pub(crate) fn base_level_of<'a>(
+        &'a self,
+        mesh: &crate::mesh::ControlMesh,
+        built: &'a mut Option<crate::refine::Level>,
+    ) -> crate::error::Result<&'a crate::refine::Level> {
+        match self.base_level.as_deref() {
+            Some(l)
+                if l.num_faces() == mesh.num_faces() && l.num_vertices() == mesh.num_vertices() =>
+            {
+                Ok(l)
+            }
+            _ => Ok(built.insert(crate::refine::Level::base(mesh, &self.mesh_options)?.0)),
+        }
+    }
+
+    /// Bytes used by the table (stencils, patches, tree, end-cap topology, the base level kept
+    /// for dicing; not the levels that end caps refine lazily when queries reach them, nor the
+    /// shared Stam matrices).
     pub fn bytes(&self) -> usize {
+        let level_bytes = |l: &crate::refine::Level| {
+            let t = &l.topo;
+            4 * (t.face_offsets.len()
+                + t.face_verts.len()
+                + t.face_edges.len()
+                + 2 * t.edge_verts.len()
+                + t.edge_face_offsets.len()
+                + t.edge_faces.len()
+                + t.vert_face_offsets.len()
+                + 2 * t.vert_faces.len()
+                + t.vert_edge_offsets.len()
+                + t.vert_edges.len()
+                + l.edge_sharpness.len()
+                + l.vertex_sharpness.len())
+                + l.face_hole.len()
+        };
         let topo_bytes: usize = self
             .end_caps
             .iter()
-            .map(|c| {
-                let t = &c.root.level.topo;
-                let points = 4 * c.points.len();
-                4 * (t.face_offsets.len()
-                    + t.face_verts.len()
-                    + t.face_edges.len()
-                    + 2 * t.edge_verts.len()
-                    + t.edge_face_offsets.len()
-                    + t.edge_faces.len()
-                    + t.vert_face_offsets.len()
-                    + 2 * t.vert_faces.len()
-                    + t.vert_edge_offsets.len()
-                    + t.vert_edges.len()
-                    + c.root.level.edge_sharpness.len()
-                    + c.root.level.vertex_sharpness.len())
-                    + points
-            })
-            .sum();
+            .map(|c| level_bytes(&c.root.level) + 4 * c.points.len())
+            .sum::<usize>()
+            + self.base_level.as_deref().map_or(0, level_bytes);
         self.loop_surface.as_ref().map_or(0, |s| s.bytes())
             + self.approx.as_ref().map_or(0, |s| s.bytes())
             + self.quad_approx.as_ref().map_or(0, |s| s.bytes())
