@@ -382,7 +382,9 @@ pub fn face_edge_param(n: usize, m: usize, t: f64) -> (u32, f64, f64) {
 
 /// Shared vertices and the layout of the diced mesh's first part.
 struct Shared {
-    points: Vec<Point>,
+    /// Each point's domain and parameters (its owner: seam points of other domains are
+    /// copies), in order; the points are evaluated into the diced mesh's first vertices.
+    jobs: Vec<(u32, u32, f64, f64)>,
     /// Index of each base vertex's point (`u32::MAX` if no live face uses it).
     vertex: Vec<u32>,
     /// First index of each edge's interior samples (`r_e - 1` of them, from `edge_verts[0]`).
@@ -571,33 +573,10 @@ fn dice_with(
             }
         }
     }
-    // Evaluated in place (collecting results would gather per-thread pieces and copy them),
-    // in runs whose normals are found at once.
-    let mut points = vec![Point::default(); jobs.len()];
-    const RUN: usize = 256;
-    points
-        .par_chunks_mut(RUN)
-        .zip(jobs.par_chunks(RUN))
-        .try_for_each_init(LatticeScratch::default, |scratch, (out, jobs)| {
-            let at = |i: usize| {
-                let (f, k, u, v) = jobs[i];
-                FaceCoord::new(f, k, u, v)
-            };
-            if displacer.is_some() {
-                for (i, p) in out.iter_mut().enumerate() {
-                    let FaceCoord { face, k, u, v } = at(i);
-                    *p = eval_point(table, displacer.as_ref(), face, k, u, v)?;
-                }
-                return Ok(());
-            }
-            scratch.points.clear();
-            for i in 0..jobs.len() {
-                scratch.points.push(table.eval_d1(at(i))?);
-            }
-            scratch.finish(table, at, |i, q| out[i] = q)
-        })?;
+    // The shared points are evaluated once the diced mesh is allocated, straight into its
+    // first vertices (below).
     let shared = Shared {
-        points,
+        jobs,
         vertex,
         edge_first,
         centre,
@@ -618,6 +597,7 @@ fn dice_with(
         level,
         rates: &rates,
         shared: &shared,
+        shared_positions: &[],
         sharp_edge: &sharp_edge,
         sharp_vertex: &sharp_vertex,
         displace: displacer.as_ref(),
@@ -634,7 +614,7 @@ fn dice_with(
             ctx.domain_size(f as usize, k as usize, cache)
         })
         .collect();
-    let total_points = shared.points.len() + sizes.iter().map(|z| z.points).sum::<usize>();
+    let total_points = shared.jobs.len() + sizes.iter().map(|z| z.points).sum::<usize>();
     let total_tris: usize = sizes.iter().map(|z| z.triangles).sum();
     if u32::try_from(total_points).is_err() || total_points as u64 >= LOCAL as u64 {
         return Err(Error::new(
@@ -659,29 +639,72 @@ fn dice_with(
     };
     let mut levels = vec![0u8; if lean { total_tris } else { 0 }];
     let mut codes = vec![0u32; if lean { total_points } else { 0 }];
-    for (i, q) in shared.points.iter().enumerate() {
-        out.positions[i] = q.p;
-        if let Some(slot) = out.normals.get_mut(i) {
-            *slot = q.n;
+    // The shared points, evaluated in parallel into their slots (no buffer of points to copy
+    // from), in runs whose normals are found at once (and encoded at once when lean).
+    let n = shared.jobs.len();
+    let (shared_positions, mut positions) = out.positions.split_at_mut(n);
+    {
+        const RUN: usize = 256;
+        let mut runs = Vec::with_capacity(n.div_ceil(RUN));
+        let mut normals = out.normals.get_mut(..n).unwrap_or_default();
+        let mut params = out.params.get_mut(..n).unwrap_or_default();
+        let mut point_codes = codes.get_mut(..n).unwrap_or_default();
+        let mut rest = &mut shared_positions[..];
+        for jobs in shared.jobs.chunks(RUN) {
+            let len = jobs.len();
+            let (nl, cl) = if lean { (0, len) } else { (len, 0) };
+            runs.push((
+                jobs,
+                split_off(&mut rest, len),
+                split_off(&mut normals, nl),
+                split_off(&mut params, nl),
+                split_off(&mut point_codes, cl),
+            ));
         }
-        if let Some(slot) = out.params.get_mut(i) {
-            *slot = q.param;
-        }
+        runs.into_par_iter().try_for_each_init(
+            || (LatticeScratch::default(), Vec::new()),
+            |(scratch, run_normals), (jobs, p, nrm, prm, cds)| {
+                run_normals.clear();
+                run_normals.resize(jobs.len(), [0.0; 3]);
+                let mut put = |i: usize, q: Point| {
+                    p[i] = q.p;
+                    run_normals[i] = q.n;
+                    if let Some(slot) = nrm.get_mut(i) {
+                        *slot = q.n;
+                    }
+                    if let Some(slot) = prm.get_mut(i) {
+                        *slot = q.param;
+                    }
+                };
+                let at = |i: usize| {
+                    let (f, k, u, v) = jobs[i];
+                    FaceCoord::new(f, k, u, v)
+                };
+                if displacer.is_some() {
+                    for i in 0..jobs.len() {
+                        let FaceCoord { face, k, u, v } = at(i);
+                        put(i, eval_point(table, displacer.as_ref(), face, k, u, v)?);
+                    }
+                } else {
+                    scratch.points.clear();
+                    for i in 0..jobs.len() {
+                        scratch.points.push(table.eval_d1(at(i))?);
+                    }
+                    scratch.finish(table, at, put)?;
+                }
+                if lean {
+                    oct_encode_all(run_normals, cds);
+                }
+                Ok::<(), Error>(())
+            },
+        )?;
     }
-    if lean {
-        let n = shared.points.len();
-        codes[..n]
-            .par_chunks_mut(4096)
-            .zip(shared.points.par_chunks(4096))
-            .for_each(|(c, q)| {
-                let normals: Vec<[f32; 3]> = q.iter().map(|q| q.n).collect();
-                oct_encode_all(&normals, c);
-            });
-    }
+    let ctx = DomainCtx {
+        shared_positions,
+        ..ctx
+    };
     let mut jobs = Vec::with_capacity(domains.len());
     {
-        let n = shared.points.len();
-        let mut positions = &mut out.positions[n..];
         let mut normals = out.normals.get_mut(n..).unwrap_or_default();
         let mut point_codes = codes.get_mut(n..).unwrap_or_default();
         let mut params = out.params.get_mut(n..).unwrap_or_default();
@@ -826,6 +849,9 @@ struct DomainCtx<'a> {
     level: &'a Level,
     rates: &'a rates::Rates,
     shared: &'a Shared,
+    /// The shared points' positions (empty until they are evaluated, after the domains'
+    /// sizes are known).
+    shared_positions: &'a [[f32; 3]],
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
     displace: Option<&'a DisplacedSurface<'a>>,
@@ -948,8 +974,8 @@ impl DomainCtx<'_> {
     /// Whether side point `sp` of domain `(f, k)` is a seam vertex owned by another domain
     /// (the domain stores a copy of its own).
     fn foreign_seam(&self, f: usize, k: usize, sp: SidePoint) -> bool {
-        let owner = self.shared.points[sp.index as usize].param;
-        sp.seam && (owner.face as usize != f || owner.k as usize != k)
+        let (face, owner_k, _, _) = self.shared.jobs[sp.index as usize];
+        sp.seam && (face as usize != f || owner_k as usize != k)
     }
 
     /// What domain `(f, k)` adds to the diced mesh (nothing is evaluated).
@@ -998,7 +1024,7 @@ impl DomainCtx<'_> {
                     // A seam vertex owned by another domain: copy its position, own normal.
                     let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
                     let mut q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
-                    q.p = self.shared.points[sp.index as usize].p;
+                    q.p = self.shared_positions[sp.index as usize];
                     map.push(LOCAL | own as u32);
                     out.put(own, q);
                     own += 1;
