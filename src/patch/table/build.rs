@@ -131,17 +131,32 @@ impl PatchTable {
                 None
             }
             Found::Regular(kind) => {
-                let first = self.point_stencils.len() as u32;
-                for row in rows.by_ref().take(16) {
-                    self.point_stencils
-                        .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
-                }
+                let rows: [&[(u32, f64)]; 16] =
+                    std::array::from_fn(|_| rows.next().expect("a regular patch's 16 rows"));
+                // Control points that are vertices as they are are read from the vertices, at
+                // level 0 (whose patches are whole domains, gathered once per lattice; deeper
+                // ones are evaluated point by point under trees, where a gather per point
+                // costs more than it saves).
+                let direct = depth == 0 && rows.iter().all(|r| matches!(r, [(_, w)] if *w == 1.0));
+                let first = if direct {
+                    let first = self.direct.len() as u32;
+                    self.direct.extend(rows.iter().map(|r| offset + r[0].0));
+                    first
+                } else {
+                    let first = self.point_stencils.len() as u32;
+                    for row in rows {
+                        self.point_stencils
+                            .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
+                    }
+                    first
+                };
                 self.add_leaf(
                     slot,
                     Patch {
                         kind: patch_kind(kind),
                         level: depth as u8,
                         first_point: first,
+                        direct,
                         end_cap: 0,
                         ..Patch::UNSET
                     },
@@ -402,6 +417,8 @@ impl PatchTable {
             chain_edits: Vec::new(),
             base_edits: Vec::new(),
             points: Vec::new(),
+            verts: Vec::new(),
+            direct: Vec::new(),
             end_caps: Vec::new(),
             stam: Vec::new(),
             use_stam: stam,
@@ -602,6 +619,7 @@ impl PatchTable {
             all.extend_from_slice(&child);
         }
         self.points = self.point_stencils.apply_points(&all);
+        self.verts = all;
         if let Some(q) = self.quad_approx.take() {
             match q.with_positions(base, self) {
                 Ok(a) => self.quad_approx = Some(std::sync::Arc::new(a)),

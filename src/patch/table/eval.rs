@@ -71,14 +71,11 @@ impl PatchTable {
     ) -> PointD1 {
         let patch = &self.patches[p as usize];
         let (pt, local) = match patch.kind {
-            PatchKind::BSpline { .. } => {
-                (bspline::eval_d1(self.grid(patch.first_point), s, t), None)
-            }
+            PatchKind::BSpline { .. } => (bspline::eval_d1(&self.grid(patch), s, t), None),
             PatchKind::SingleCrease { edge, sharpness } => {
                 let curve = parts.curve(p, sharpness as f64);
-                let grid = self.grid(patch.first_point);
                 (
-                    single_crease::eval_with_d1(grid, edge as usize, curve, s, t),
+                    single_crease::eval_with_d1(&self.grid(patch), edge as usize, curve, s, t),
                     None,
                 )
             }
@@ -268,29 +265,32 @@ impl PatchTable {
         samples.par_iter().map(|&at| self.eval(at)).collect()
     }
 
-    /// The 16 control points from `first`, in place.
-    pub(super) fn grid(&self, first: u32) -> &ControlGrid {
-        let first = first as usize;
-        self.points[first..first + 16]
-            .try_into()
-            .expect("a B-spline or single-crease patch has 16 control points")
+    /// The 16 control points of B-spline or single-crease patch `patch`: in place, or
+    /// gathered from the vertices for a direct patch.
+    pub(crate) fn grid(&self, patch: &Patch) -> std::borrow::Cow<'_, ControlGrid> {
+        let first = patch.first_point as usize;
+        if patch.direct {
+            // `+ 0.0` as a stencil row of one unit term sums (`0 + 1·x`): the same bits,
+            // the sign of a zero included.
+            std::borrow::Cow::Owned(std::array::from_fn(|i| {
+                self.verts[self.direct[first + i] as usize].map(|x| x + 0.0)
+            }))
+        } else {
+            std::borrow::Cow::Borrowed(
+                self.points[first..first + 16]
+                    .try_into()
+                    .expect("a B-spline or single-crease patch has 16 control points"),
+            )
+        }
     }
 
     /// Evaluates a leaf at local (s, t); returns the point (derivatives in the leaf's (s, t),
     /// or in the frame given within the leaf) and the number of on-demand levels used.
     fn eval_patch(&self, patch: &Patch, s: f64, t: f64) -> (PatchPoint, Option<Frame>, u8) {
         match patch.kind {
-            PatchKind::BSpline { .. } => {
-                (bspline::eval(self.grid(patch.first_point), s, t), None, 0)
-            }
+            PatchKind::BSpline { .. } => (bspline::eval(&self.grid(patch), s, t), None, 0),
             PatchKind::SingleCrease { edge, sharpness } => (
-                single_crease::eval(
-                    self.grid(patch.first_point),
-                    edge as usize,
-                    sharpness as f64,
-                    s,
-                    t,
-                ),
+                single_crease::eval(&self.grid(patch), edge as usize, sharpness as f64, s, t),
                 None,
                 0,
             ),

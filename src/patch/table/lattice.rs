@@ -36,7 +36,7 @@ impl PatchTable {
         }
         if let Some(patch) = self.root_patch(face, k) {
             if let PatchKind::BSpline { .. } = patch.kind {
-                bspline::eval_lattice(self.grid(patch.first_point), nu, nv, |pt| {
+                bspline::eval_lattice(&self.grid(patch), nu, nv, |pt| {
                     // The root's frame, as `eval` applies it (the identity up to the sign of
                     // zeros).
                     out(Frame::UNIT.face_point_d1(pt))

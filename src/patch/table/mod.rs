@@ -99,8 +99,13 @@ pub struct Patch {
     /// Subdivision level of the patch (0 = base face).
     pub level: u8,
     /// First control point in [`PatchTable::points`] (16 for B-spline and single-crease
-    /// patches, `2n + 8` for Stam patches, all vertices of the level's cut-out for end caps).
+    /// patches, `2n + 8` for Stam patches, all vertices of the level's cut-out for end caps);
+    /// for a `direct` patch, the first of its 16 vertex indices in [`PatchTable::direct`].
     pub first_point: u32,
+    /// A B-spline or single-crease patch whose 16 control points are vertices of the
+    /// refinement ([`PatchTable::verts`]) as they are: no control point of its own (an
+    /// interior patch, where no control point is a boundary's reflection).
+    pub direct: bool,
     /// For end caps: index of the cap's own neighbourhood (its two-ring, cut out at build time).
     pub end_cap: u32,
     /// Base face.
@@ -122,6 +127,7 @@ impl Patch {
         kind: PatchKind::EndCap,
         level: 0,
         first_point: 0,
+        direct: false,
         end_cap: 0,
         face: 0,
         sub_face: 0,
@@ -168,6 +174,11 @@ pub struct PatchTable {
     base_edits: Vec<crate::refine::edit::PositionEdit>,
     /// Control point positions (from the last [`Self::set_positions`]).
     pub points: Vec<[f64; 3]>,
+    /// The vertices of the refinement (the base vertices, then each refined level's), from
+    /// the last [`Self::set_positions`]: what `direct` patches read.
+    pub verts: Vec<[f64; 3]>,
+    /// Direct patches' control points: 16 indices into [`Self::verts`] each.
+    pub direct: Vec<u32>,
     end_caps: Vec<CapMesh>,
     /// Stam's matrices by valence (shared, see [`crate::patch::stam::basis`]).
     stam: Vec<Option<std::sync::Arc<crate::patch::stam::StamBasis>>>,
@@ -270,6 +281,8 @@ impl PatchTable {
                 .map(|(sel, t)| sel.len() * 4 + t.bytes())
                 .sum::<usize>()
             + self.points.len() * 24
+            + self.verts.len() * 24
+            + self.direct.len() * 4
             + self.patches.len() * std::mem::size_of::<Patch>()
             + self.nodes.len() * std::mem::size_of::<Node>()
             + self.kids.len() * std::mem::size_of::<[Node; 4]>()

@@ -280,9 +280,7 @@ impl PatchTable {
             b: patch.axis_v,
         };
         let (face, k) = (patch.face, patch.sub_face as u32);
-        let grid = || -> ControlGrid {
-            std::array::from_fn(|i| self.points[patch.first_point as usize + i])
-        };
+        let grid = || -> ControlGrid { *self.grid(patch) };
         match patch.kind {
             PatchKind::BSpline { closed } => regular_pieces(
                 RegularKind::BSpline { closed },
