@@ -18,8 +18,55 @@ const U: [[i32; 2]; 4] = [[1, 0], [0, 1], [-1, 0], [0, -1]];
 /// Axis towards the previous corner.
 const V: [[i32; 2]; 4] = [[0, 1], [-1, 0], [0, -1], [1, 0]];
 
-/// A control point as a combination of level vertices.
-pub type Combo = Vec<(u32, f64)>;
+/// A control point as a combination of level vertices: a vertex, or a reflection across a
+/// boundary (`2a − b`), or a reflection of reflections at a corner (four terms at most), held
+/// in place (a regular face's sixteen control points allocate nothing).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Combo {
+    len: u8,
+    terms: [(u32, f64); 4],
+}
+
+impl Combo {
+    /// Vertex `v` alone.
+    pub fn one(v: u32) -> Combo {
+        let mut c = Combo::default();
+        c.add(v, 1.0);
+        c
+    }
+
+    /// The terms (vertex, weight).
+    pub fn terms(&self) -> &[(u32, f64)] {
+        &self.terms[..self.len as usize]
+    }
+
+    /// Adds `w` times vertex `v`, merged with a term of `v` already there.
+    fn add(&mut self, v: u32, w: f64) {
+        let n = self.len as usize;
+        if let Some(t) = self.terms[..n].iter_mut().find(|t| t.0 == v) {
+            t.1 += w;
+        } else {
+            // Two reflections of two terms each: no combination has more than four.
+            self.terms[n] = (v, w);
+            self.len += 1;
+        }
+    }
+}
+
+impl std::ops::Deref for Combo {
+    type Target = [(u32, f64)];
+    fn deref(&self) -> &[(u32, f64)] {
+        self.terms()
+    }
+}
+
+impl<'a> IntoIterator for &'a Combo {
+    type Item = &'a (u32, f64);
+    type IntoIter = std::slice::Iter<'a, (u32, f64)>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.terms().iter()
+    }
+}
 
 /// What kind of regular patch a face is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,21 +97,21 @@ fn sub(a: [i32; 2], b: [i32; 2]) -> [i32; 2] {
 }
 
 fn reflect(grid: &[Option<Combo>; 16], on: usize, inside: usize) -> Combo {
-    let mut out: Combo = Vec::new();
-    let mut push = |i: u32, w: f64| {
-        if let Some(t) = out.iter_mut().find(|t| t.0 == i) {
-            t.1 += w;
-        } else {
-            out.push((i, w));
-        }
-    };
+    let mut sum = Combo::default();
     for &(i, w) in grid[on].as_ref().unwrap() {
-        push(i, 2.0 * w);
+        sum.add(i, 2.0 * w);
     }
     for &(i, w) in grid[inside].as_ref().unwrap() {
-        push(i, -w);
+        sum.add(i, -w);
     }
-    out.retain(|t| t.1 != 0.0);
+    // The terms that cancel are left out, the others kept in order.
+    let mut out = Combo::default();
+    for &(i, w) in sum.terms() {
+        if w != 0.0 {
+            out.terms[out.len as usize] = (i, w);
+            out.len += 1;
+        }
+    }
     out
 }
 
@@ -226,7 +273,7 @@ pub fn classify(
     // Gather.
     let mut grid: [Option<Combo>; 16] = Default::default();
     for k in 0..4 {
-        grid[at(C[k])] = Some(vec![(fv[k], 1.0)]);
+        grid[at(C[k])] = Some(Combo::one(fv[k]));
     }
     // Rows across each edge.
     for k in 0..4 {
@@ -243,8 +290,8 @@ pub fn classify(
             let gv = topo.face_vertices(g);
             // in g the edge runs v_{k+1} -> v_k
             let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
-            grid[at(x)] = Some(vec![(gv[(m + 2) % 4], 1.0)]);
-            grid[at(y)] = Some(vec![(gv[(m + 3) % 4], 1.0)]);
+            grid[at(x)] = Some(Combo::one(gv[(m + 2) % 4]));
+            grid[at(y)] = Some(Combo::one(gv[(m + 3) % 4]));
         }
     }
     for k in 0..4 {
@@ -268,7 +315,7 @@ pub fn classify(
             let oi = (ci + 2) % 4;
             let g = faces[oi] as usize;
             let gv = topo.face_vertices(g);
-            grid[at(d)] = Some(vec![(gv[(corners[oi] as usize + 2) % 4], 1.0)]);
+            grid[at(d)] = Some(Combo::one(gv[(corners[oi] as usize + 2) % 4]));
         } else if !ol {
             // lead edge closed: reflect across it (along V)
             grid[at(d)] = Some(reflect(

@@ -281,8 +281,8 @@ fn decide(
         return Found::Irregular;
     }
     if let Some((kind, cps)) = classify(level, g, single_crease) {
-        for c in cps {
-            part.push_row(c);
+        for c in &cps {
+            part.push_row(c.iter().copied());
         }
         return Found::Regular(kind);
     }
