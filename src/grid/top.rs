@@ -1,8 +1,8 @@
 //! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from obvhs's
 //! binary PLOC build (its `fast_build` preset; the collapse of least total node area,
 //! [`super::collapse`]), with exact `f32` child boxes ([`Box8`]) and an ordered,
-//! distance-culled stack traversal. Eight children per node halve the levels a ray walks against a 4-wide
-//! tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
+//! distance-culled stack traversal. Eight children per node halve the levels a ray walks
+//! against a 4-wide tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
 //!
 //! Each node's eight boxes are the exact bounds of what lies below each child (recomputed from
 //! the primitives' boxes, never taken from the builder), so the conservative box test of

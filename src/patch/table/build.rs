@@ -631,7 +631,54 @@ impl PatchTable {
 
 #[cfg(test)]
 mod tests {
+    use crate::coord::FaceCoord;
     use crate::patch::{PatchOptions, PatchTable};
+
+    /// Level-0 patches whose control points are vertices read them from the vertices, the
+    /// bits a stencil row of one unit term gives (`0 + 1·x`): on a 6 × 6 grid the 16 interior
+    /// patches are direct (boundary ones, with phantom rows, are not); re-posed, a direct
+    /// patch evaluates as a table built on the moved mesh, bit for bit.
+    #[test]
+    fn direct_patches_read_the_vertices() {
+        let mut mesh = crate::mesh::generate::grid(6);
+        // Off the plane, with negative zeros, so that the sum's sign of zero is checked.
+        for (i, p) in mesh.positions.iter_mut().enumerate() {
+            p[2] = if i % 3 == 0 {
+                -0.0
+            } else {
+                0.25 * (i % 5) as f64
+            };
+        }
+        let mut table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        let direct: Vec<usize> = (0..table.patches.len())
+            .filter(|&p| table.patches[p].direct)
+            .collect();
+        assert_eq!(direct.len(), 16, "the interior patches are direct");
+        for &p in &direct {
+            let patch = &table.patches[p];
+            let first = patch.first_point as usize;
+            let grid = table.grid(patch);
+            for (i, cp) in grid.iter().enumerate() {
+                let v = table.verts[table.direct[first + i] as usize];
+                let summed = v.map(|x| 0.0 + 1.0 * x);
+                assert_eq!(cp.map(f64::to_bits), summed.map(f64::to_bits), "patch {p}");
+            }
+        }
+        let moved: Vec<[f64; 3]> = mesh
+            .positions
+            .iter()
+            .map(|p| [p[0] - 0.5, 3.0 * p[1], p[2] + 1.0])
+            .collect();
+        table.set_positions(&moved);
+        mesh.positions = moved;
+        let fresh = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        for &p in &direct {
+            let patch = &table.patches[p];
+            let at = FaceCoord::quad(patch.face, 0.3, 0.6);
+            let (a, b) = (table.eval(at).unwrap(), fresh.eval(at).unwrap());
+            assert_eq!(a.p.map(f64::to_bits), b.p.map(f64::to_bits), "patch {p}");
+        }
+    }
 
     /// The statistics count patches by kind and level: a 6 × 6 grid is 16 interior, 16
     /// boundary and 4 corner B-spline patches at level 0; on a mesh with extraordinary
