@@ -664,11 +664,14 @@ fn dice_with(
         runs.into_par_iter().try_for_each_init(
             || (LatticeScratch::default(), Vec::new()),
             |(scratch, run_normals), (jobs, p, nrm, prm, cds)| {
+                // Lean: the run's normals gathered here, then encoded at once (`cds`).
                 run_normals.clear();
-                run_normals.resize(jobs.len(), [0.0; 3]);
+                run_normals.resize(cds.len(), [0.0; 3]);
                 let mut put = |i: usize, q: Point| {
                     p[i] = q.p;
-                    run_normals[i] = q.n;
+                    if let Some(slot) = run_normals.get_mut(i) {
+                        *slot = q.n;
+                    }
                     if let Some(slot) = nrm.get_mut(i) {
                         *slot = q.n;
                     }
