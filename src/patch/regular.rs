@@ -96,12 +96,12 @@ fn sub(a: [i32; 2], b: [i32; 2]) -> [i32; 2] {
     [a[0] - b[0], a[1] - b[1]]
 }
 
-fn reflect(grid: &[Option<Combo>; 16], on: usize, inside: usize) -> Combo {
+fn reflect(grid: &[Combo; 16], on: usize, inside: usize) -> Combo {
     let mut sum = Combo::default();
-    for &(i, w) in grid[on].as_ref().unwrap() {
+    for &(i, w) in &grid[on] {
         sum.add(i, 2.0 * w);
     }
-    for &(i, w) in grid[inside].as_ref().unwrap() {
+    for &(i, w) in &grid[inside] {
         sum.add(i, -w);
     }
     // The terms that cancel are left out, the others kept in order.
@@ -270,10 +270,10 @@ pub fn classify(
             }
         }
     }
-    // Gather.
-    let mut grid: [Option<Combo>; 16] = Default::default();
+    // Gather (in place: each point is set before a reflection reads it).
+    let mut grid = [Combo::default(); 16];
     for k in 0..4 {
-        grid[at(C[k])] = Some(Combo::one(fv[k]));
+        grid[at(C[k])] = Combo::one(fv[k]);
     }
     // Rows across each edge.
     for k in 0..4 {
@@ -290,8 +290,8 @@ pub fn classify(
             let gv = topo.face_vertices(g);
             // in g the edge runs v_{k+1} -> v_k
             let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
-            grid[at(x)] = Some(Combo::one(gv[(m + 2) % 4]));
-            grid[at(y)] = Some(Combo::one(gv[(m + 3) % 4]));
+            grid[at(x)] = Combo::one(gv[(m + 2) % 4]);
+            grid[at(y)] = Combo::one(gv[(m + 3) % 4]);
         }
     }
     for k in 0..4 {
@@ -299,8 +299,8 @@ pub fn classify(
         if !open[k] {
             let x = sub(C[k], V[k]);
             let y = sub(C[k1], V[k]);
-            grid[at(x)] = Some(reflect(&grid, at(C[k]), at(add(C[k], V[k]))));
-            grid[at(y)] = Some(reflect(&grid, at(C[k1]), at(add(C[k1], V[k]))));
+            grid[at(x)] = reflect(&grid, at(C[k]), at(add(C[k], V[k])));
+            grid[at(y)] = reflect(&grid, at(C[k1]), at(add(C[k1], V[k])));
         }
     }
     // Diagonals.
@@ -315,23 +315,14 @@ pub fn classify(
             let oi = (ci + 2) % 4;
             let g = faces[oi] as usize;
             let gv = topo.face_vertices(g);
-            grid[at(d)] = Some(Combo::one(gv[(corners[oi] as usize + 2) % 4]));
+            grid[at(d)] = Combo::one(gv[(corners[oi] as usize + 2) % 4]);
         } else if !ol {
             // lead edge closed: reflect across it (along V)
-            grid[at(d)] = Some(reflect(
-                &grid,
-                at(add(d, V[k])),
-                at(add(add(d, V[k]), V[k])),
-            ));
+            grid[at(d)] = reflect(&grid, at(add(d, V[k])), at(add(add(d, V[k]), V[k])));
         } else {
-            grid[at(d)] = Some(reflect(
-                &grid,
-                at(add(d, U[k])),
-                at(add(add(d, U[k]), U[k])),
-            ));
+            grid[at(d)] = reflect(&grid, at(add(d, U[k])), at(add(add(d, U[k]), U[k])));
         }
     }
-    let cps: [Combo; 16] = std::array::from_fn(|i| grid[i].take().unwrap_or_default());
     let kind = match crease_edge {
         Some((k, s)) => RegularKind::SingleCrease {
             edge: k as u8,
@@ -341,5 +332,5 @@ pub fn classify(
             closed: open.iter().filter(|&&o| !o).count() as u8,
         },
     };
-    Some((kind, cps))
+    Some((kind, grid))
 }

@@ -110,12 +110,14 @@ impl PatchTable {
 
     /// Settles face `g` of a level (whose vertices are numbered from `offset` among the
     /// table's refined vertices) into node `slot`, as [`decide`] found it (`rows`: its
-    /// control points' combinations, one per point): a hole, a regular patch, a Stam patch, an
-    /// end cap at the maximum level, or a face to refine further (returned).
+    /// control points' combinations, one per point; `direct`: a direct patch's vertices): a
+    /// hole, a regular patch, a Stam patch, an end cap at the maximum level, or a face to
+    /// refine further (returned).
     fn settle<'a>(
         &mut self,
         found: Found,
         mut rows: impl Iterator<Item = &'a [(u32, f64)]>,
+        direct: &mut impl Iterator<Item = &'a [u32]>,
         offset: u32,
         (g, slot): (usize, u32),
         depth: usize,
@@ -130,33 +132,37 @@ impl PatchTable {
                 self.add_stam(slot, corner, &verts, depth);
                 None
             }
-            Found::Regular(kind) => {
-                let rows: [&[(u32, f64)]; 16] =
-                    std::array::from_fn(|_| rows.next().expect("a regular patch's 16 rows"));
-                // Control points that are vertices as they are are read from the vertices, at
-                // level 0 (whose patches are whole domains, gathered once per lattice; deeper
-                // ones are evaluated point by point under trees, where a gather per point
-                // costs more than it saves).
-                let direct = depth == 0 && rows.iter().all(|r| matches!(r, [(_, w)] if *w == 1.0));
-                let first = if direct {
-                    let first = self.direct.len() as u32;
-                    self.direct.extend(rows.iter().map(|r| offset + r[0].0));
-                    first
-                } else {
-                    let first = self.point_stencils.len() as u32;
-                    for row in rows {
-                        self.point_stencils
-                            .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
-                    }
-                    first
-                };
+            Found::Direct(kind) => {
+                let first = self.direct.len() as u32;
+                let verts = direct.next().expect("a direct patch's 16 vertices");
+                self.direct.extend(verts.iter().map(|&v| offset + v));
                 self.add_leaf(
                     slot,
                     Patch {
                         kind: patch_kind(kind),
                         level: depth as u8,
                         first_point: first,
-                        direct,
+                        direct: true,
+                        end_cap: 0,
+                        ..Patch::UNSET
+                    },
+                );
+                None
+            }
+            Found::Regular(kind) => {
+                let first = self.point_stencils.len() as u32;
+                for _ in 0..16 {
+                    let row = rows.next().expect("a regular patch's 16 rows");
+                    self.point_stencils
+                        .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
+                }
+                self.add_leaf(
+                    slot,
+                    Patch {
+                        kind: patch_kind(kind),
+                        level: depth as u8,
+                        first_point: first,
+                        direct: false,
                         end_cap: 0,
                         ..Patch::UNSET
                     },
@@ -195,7 +201,7 @@ impl PatchTable {
                 .fold(Decided::default, |mut part, &(g, forced)| {
                     let found = decide(
                         level,
-                        g as usize,
+                        (g as usize, depth),
                         forced,
                         single_crease,
                         use_stam,
@@ -213,10 +219,13 @@ impl PatchTable {
                 .reserve(parts.iter().map(|p| p.found.len()).sum());
             for part in parts {
                 let mut rows = part.rows();
+                let mut direct = part.direct.chunks_exact(16);
                 for &found in &part.found {
                     let (g, slot) = (jobs[next].0 as usize, slot_of(next));
                     next += 1;
-                    out.extend(self.settle(found, &mut rows, offset, (g, slot), depth));
+                    let settled =
+                        self.settle(found, &mut rows, &mut direct, offset, (g, slot), depth);
+                    out.extend(settled);
                 }
             }
         }
@@ -235,16 +244,21 @@ enum Found {
     Stam(usize, usize),
     /// A regular patch: sixteen rows, its control points' combinations.
     Regular(RegularKind),
+    /// A regular patch of level 0 whose control points are vertices as they are: sixteen
+    /// vertices (read from the table's vertices, [`super::Patch::direct`]).
+    Direct(RegularKind),
     /// Irregular: refined further, or an end cap at the maximum level.
     Irregular,
 }
 
-/// A run of decisions and their control points' rows (terms in the level's numbering).
+/// A run of decisions and their control points: rows of terms, and direct patches'
+/// vertices, sixteen each (in the level's numbering).
 #[derive(Default)]
 struct Decided {
     found: Vec<Found>,
     ends: Vec<u32>,
     terms: Vec<(u32, f64)>,
+    direct: Vec<u32>,
 }
 
 impl Decided {
@@ -268,7 +282,7 @@ impl Decided {
 /// need to isolate it to the maximum level.
 fn decide(
     level: &Level,
-    g: usize,
+    (g, depth): (usize, usize),
     forced: bool,
     single_crease: bool,
     use_stam: bool,
@@ -281,6 +295,18 @@ fn decide(
         return Found::Irregular;
     }
     if let Some((kind, cps)) = classify(level, g, single_crease) {
+        // Control points that are vertices as they are are read from the vertices, at level
+        // 0 (whose patches are whole domains, gathered once per lattice; deeper ones are
+        // evaluated point by point under trees, where a gather per point costs more than it
+        // saves).
+        if depth == 0
+            && cps
+                .iter()
+                .all(|c| matches!(c.terms(), [(_, w)] if *w == 1.0))
+        {
+            part.direct.extend(cps.iter().map(|c| c.terms()[0].0));
+            return Found::Direct(kind);
+        }
         for c in &cps {
             part.push_row(c.iter().copied());
         }
