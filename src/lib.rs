@@ -39,6 +39,7 @@ pub mod mesh;
 pub mod numeric;
 pub mod oct;
 pub mod patch;
+pub mod prefetch;
 pub mod refine;
 #[cfg(feature = "render")]
 pub mod render;

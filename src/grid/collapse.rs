@@ -12,6 +12,7 @@
 //! or gives its slots to its two children, `j` to the first and `i − j` to the second.
 //! `cost(n, i)` does not grow with `i`, so a spread over `i` slots never needs fewer.
 
+use crate::prefetch;
 use obvhs::bvh2::Bvh2;
 
 /// Slots of a node.
@@ -45,7 +46,11 @@ impl<'a> Collapse<'a> {
                 stack.extend([first, first + 1]);
             }
         }
-        for &i in order.iter().rev() {
+        for (k, &i) in order.iter().enumerate().rev() {
+            // The nodes come in no order of memory: ask for one a few ahead.
+            if let Some(&ahead) = k.checked_sub(prefetch::AHEAD).map(|a| &order[a]) {
+                prefetch::prefetch(bvh2.nodes.get(ahead));
+            }
             let node = &bvh2.nodes[i];
             if node.prim_count != 0 {
                 continue; // A leaf: one slot, no cost (the zeros already there).

@@ -31,6 +31,7 @@ use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{split_off, DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use crate::oct::{oct_decode, oct_encode_all};
+use crate::prefetch;
 use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
@@ -310,6 +311,7 @@ impl GridMesh {
             nboxes += h.num_boxes();
             nlevels += h.num_levels();
         }
+
         if plans.len() >= 1 << 24 {
             return Err(too_many(plans.len(), "grid blocks", "2^24"));
         }
@@ -328,6 +330,7 @@ impl GridMesh {
                 &encoded[..]
             }
         };
+
         let mut m = GridMesh {
             triangles: d.triangles.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
@@ -341,6 +344,7 @@ impl GridMesh {
         // allocation's pages are first touched by the block that writes them, in parallel).
         m.boxes = bytemuck::zeroed_vec(nboxes);
         m.levels = vec![0; nlevels];
+
         {
             let mut jobs = Vec::with_capacity(plans.len());
             let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
@@ -360,6 +364,7 @@ impl GridMesh {
                 p.header.root = fill_block(d, tri_levels, codes, p, out);
             });
         }
+
         // Each block's bounds: the union of its root's children (absent ones are empty).
         let mut prim_boxes: Vec<top::Bounds> = plans
             .iter()
@@ -406,6 +411,7 @@ impl GridMesh {
                 level: info.level,
             });
         }
+
         m.bounds = prim_boxes.iter().fold(m.bounds, |a, &b| top::union(a, b));
         if loose.len() >= 1 << 31 {
             return Err(too_many(loose.len(), "loose triangles", "2^31"));
@@ -415,6 +421,7 @@ impl GridMesh {
         }
         let bounds = prim_boxes;
         let mut top = Top::build(&bounds);
+
         // Place block headers and strips in the order a depth-first walk meets them.
         let mut order = Vec::with_capacity(bounds.len());
         let mut stack = vec![top.root];
@@ -432,7 +439,11 @@ impl GridMesh {
         m.blocks.reserve(nblocks);
         m.loose.reserve(loose.len());
         let mut new_id = vec![0u32; bounds.len()];
-        for &prim in &order {
+        for (i, &prim) in order.iter().enumerate() {
+            // The headers are gathered in the tree's order: ask for one a few ahead.
+            if let Some(&ahead) = order.get(i + prefetch::AHEAD) {
+                prefetch::prefetch(plans.get(ahead).map(|p| &p.header));
+            }
             if prim < nblocks {
                 let h = plans[prim].header;
                 new_id[prim] = m.blocks.len() as u32;
@@ -459,6 +470,7 @@ impl GridMesh {
         for n in &mut top.nodes {
             n.child = n.child.map(|r| renumber(r, &new_id));
         }
+
         m.top = top;
         Ok(m)
     }
