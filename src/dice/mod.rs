@@ -518,7 +518,23 @@ fn dice_with(
         .collect();
 
     // --- Shared points: evaluate in parallel, then lay out. -------------------------------
-    let mut jobs: Vec<(u32, u32, f64, f64)> = Vec::new();
+    // At most a point per vertex, per edge's inner point and per n-gon's centre and spokes'
+    // inner points (reserved: grown by doubling, the list was copied and faulted in again).
+    let most = topo.num_vertices
+        + rates
+            .edge
+            .iter()
+            .map(|&r| r.saturating_sub(1) as usize)
+            .sum::<usize>()
+        + (0..topo.num_faces())
+            .filter(|&f| topo.face_size(f) != 4)
+            .map(|f| {
+                let base = topo.face_offsets[f] as usize;
+                let spokes = &rates.spoke[base..base + topo.face_size(f)];
+                1 + spokes.iter().map(|&s| s as usize).sum::<usize>()
+            })
+            .sum::<usize>();
+    let mut jobs: Vec<(u32, u32, f64, f64)> = Vec::with_capacity(most);
     let mut vertex = vec![u32::MAX; topo.num_vertices];
     for v in 0..topo.num_vertices {
         let faces = topo.vertex_faces(v);
@@ -634,7 +650,7 @@ fn dice_with(
         },
         triangles: vec![[0; 3]; total_tris],
         tri_info: bytemuck::zeroed_vec(total_tris),
-        grids: Vec::new(),
+        grids: Vec::with_capacity(sizes.iter().filter(|z| z.grid.is_some()).count()),
         grid_frames: vec![0; sizes.iter().map(|z| z.frame).sum()],
     };
     let mut levels = vec![0u8; if lean { total_tris } else { 0 }];

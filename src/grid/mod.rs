@@ -149,30 +149,36 @@ struct Planned {
     header: Block,
 }
 
-/// Splits `n` quads into runs of at most [`BLOCK`], as even as possible, even lengths first.
-fn runs(n: usize) -> Vec<(usize, usize)> {
+/// Splits `n` quads into runs of at most [`BLOCK`], as even as possible, even lengths first:
+/// `(start, length)` of each, in order (nothing allocated).
+fn runs(n: usize) -> impl Iterator<Item = (usize, usize)> + Clone {
     let count = n.div_ceil(BLOCK);
-    let mut out = Vec::with_capacity(count);
     let mut start = 0;
-    for i in 0..count {
+    (0..count).map(move |i| {
         let left = n - start;
         let parts = count - i;
         let mut len = left.div_ceil(parts);
         if len % 2 == 1 && len < left && len < BLOCK {
             len += 1;
         }
-        out.push((start, len.min(left)));
-        start += len.min(left);
-    }
-    out
+        let run = (start, len.min(left));
+        start += run.1;
+        run
+    })
+}
+
+/// How many blocks [`plan_region`] makes of region `g`.
+fn blocks_of(g: &GridRegion) -> usize {
+    let [qc, qr] = g.part.quads.map(|x| x as usize);
+    qc.div_ceil(BLOCK) * qr.div_ceil(BLOCK)
 }
 
 /// Appends the blocks of region `region` (`g`) to `out`: their headers, without offsets
 /// (nothing is read from the diced mesh).
 fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>) {
     let [qc, qr] = g.part.quads.map(|x| x as usize);
-    for &(y0, rows) in &runs(qr) {
-        for &(x0, cols) in &runs(qc) {
+    for (y0, rows) in runs(qr) {
+        for (x0, cols) in runs(qc) {
             let header = Block {
                 tri0: g.first_triangle + 2 * (y0 * qc + x0) as u32,
                 tri_stride: 2 * qc as u32,
@@ -293,7 +299,8 @@ impl GridMesh {
         // Plan the blocks (headers, then their offsets in region order), store each in place,
         // in parallel, and take its bounds from its root box; the top level is built over
         // those bounds and only the headers are then put in its order.
-        let mut plans: Vec<Planned> = Vec::new();
+        let mut plans: Vec<Planned> =
+            Vec::with_capacity(d.grids.iter().map(blocks_of).sum::<usize>());
         for (i, g) in d.grids.iter().enumerate() {
             if g.part.quads[0] > 0 && g.part.quads[1] > 0 {
                 plan_region(i, g, &mut plans);
@@ -872,15 +879,15 @@ mod tests {
     #[test]
     fn runs_tile_and_stay_small() {
         for n in 1..40 {
-            let r = runs(n);
+            let r: Vec<_> = runs(n).collect();
             assert_eq!(r.iter().map(|x| x.1).sum::<usize>(), n);
             assert!(r.iter().all(|x| x.1 >= 1 && x.1 <= BLOCK), "{n}: {r:?}");
             for w in r.windows(2) {
                 assert_eq!(w[0].0 + w[0].1, w[1].0);
             }
         }
-        assert_eq!(runs(16), vec![(0, 8), (8, 8)]);
-        assert_eq!(runs(4), vec![(0, 4)]);
+        assert_eq!(runs(16).collect::<Vec<_>>(), vec![(0, 8), (8, 8)]);
+        assert_eq!(runs(4).collect::<Vec<_>>(), vec![(0, 4)]);
     }
 
     use top::{union, Bounds, NONE as EMPTY_BOX};
