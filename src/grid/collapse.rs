@@ -35,27 +35,24 @@ impl<'a> Collapse<'a> {
         let mut cost = vec![[0f32; SLOTS]; n];
         let mut split = vec![[0u8; SLOTS]; n];
         let mut spread = vec![0u8; n];
-        // Children after their parent in a depth-first order: its reverse sees them first.
-        let mut order = Vec::with_capacity(n);
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
-            order.push(i);
-            let node = &bvh2.nodes[i];
-            if node.prim_count == 0 {
-                let first = node.first_index as usize;
-                stack.extend([first, first + 1]);
-            }
-        }
-        for (k, &i) in order.iter().enumerate().rev() {
-            // The nodes come in no order of memory: ask for one a few ahead.
-            if let Some(&ahead) = k.checked_sub(prefetch::AHEAD).map(|a| &order[a]) {
-                prefetch::prefetch(bvh2.nodes.get(ahead));
-            }
+        // Bottom up: a node is solved once its two children are. The nodes are visited from
+        // the last (a builder numbers most children after their parent, so most are ready
+        // by then, and the pass reads the nodes in memory order); the few that are not wait
+        // for a pass over the waiting ones, repeated until none waits (in a tree, some
+        // waiting node always has both children solved). A depth-first order instead read
+        // the nodes scattered, twice: 16 of the 316² grid's 54 ms of top level.
+        let mut done = vec![false; n];
+        let mut solve = |i: usize, done: &mut [bool]| -> bool {
             let node = &bvh2.nodes[i];
             if node.prim_count != 0 {
-                continue; // A leaf: one slot, no cost (the zeros already there).
+                // A leaf: one slot, no cost (the zeros already there).
+                done[i] = true;
+                return true;
             }
             let (l, r) = (node.first_index as usize, node.first_index as usize + 1);
+            if !(done[l] && done[r]) {
+                return false;
+            }
             // The best spread of the two children over `s` slots, for s = 2..=8.
             let mut open = [(f32::INFINITY, 0u8); SLOTS];
             for s in 2..=SLOTS {
@@ -73,6 +70,20 @@ impl<'a> Collapse<'a> {
                 let (c, j) = open[s - 1];
                 (cost[i][s - 1], split[i][s - 1]) = if c < own { (c, j) } else { (own, 0) };
             }
+            done[i] = true;
+            true
+        };
+        let mut waiting = Vec::new();
+        for i in (0..n).rev() {
+            prefetch::prefetch(i.checked_sub(prefetch::AHEAD).and_then(|a| bvh2.nodes.get(a)));
+            if !solve(i, &mut done) {
+                waiting.push(i);
+            }
+        }
+        while !waiting.is_empty() {
+            let before = waiting.len();
+            waiting.retain(|&i| !solve(i, &mut done));
+            assert!(waiting.len() < before, "the binary BVH is a tree");
         }
         Collapse {
             bvh2,
