@@ -96,17 +96,23 @@ impl<'a> Collapse<'a> {
     /// leaves (primitives) or nodes of their own, at most eight. A leaf `n` is its own one
     /// child.
     pub fn children(&self, n: usize) -> Vec<usize> {
-        let node = &self.bvh2.nodes[n];
         let mut out = Vec::with_capacity(SLOTS);
+        self.children_into(n, &mut out);
+        out
+    }
+
+    /// [`Self::children`] into `out` (cleared first: one buffer for every node).
+    pub fn children_into(&self, n: usize, out: &mut Vec<usize>) {
+        out.clear();
+        let node = &self.bvh2.nodes[n];
         if node.prim_count != 0 {
             out.push(n);
-            return out;
+            return;
         }
         let first = node.first_index as usize;
         let j = self.spread[n] as usize;
-        self.fill(first, j, &mut out);
-        self.fill(first + 1, SLOTS - j, &mut out);
-        out
+        self.fill(first, j, out);
+        self.fill(first + 1, SLOTS - j, out);
     }
 
     /// Fills `slots` slots with the subtree of binary node `n`.

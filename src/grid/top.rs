@@ -125,32 +125,33 @@ impl Top {
         };
         // The collapse: each entry is a binary node to become an 8-wide node at `slot`.
         let collapse = Collapse::new(&bvh2);
-        let leaf_ref = |n: usize, out: &mut Vec<Ref>| {
-            let node = &bvh2.nodes[n];
-            for i in 0..node.prim_count {
-                out.push(LEAF | bvh2.primitive_indices[(node.first_index + i) as usize]);
-            }
-        };
         let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, 1)];
         top.nodes.push(Node8::EMPTY);
+        let mut kids = Vec::with_capacity(WIDTH);
         while let Some((bin, slot, level)) = work.pop() {
             top.depth = top.depth.max(level);
-            let kids = collapse.children(bin);
-            let mut refs: Vec<Ref> = Vec::with_capacity(WIDTH);
+            collapse.children_into(bin, &mut kids);
+            let mut refs = [EMPTY; WIDTH];
+            let mut len = 0;
             for &k in &kids {
-                if bvh2.nodes[k].is_leaf() {
-                    leaf_ref(k, &mut refs);
+                let node = &bvh2.nodes[k];
+                if node.is_leaf() {
+                    for i in 0..node.prim_count {
+                        assert!(len < WIDTH, "a leaf holds one primitive");
+                        refs[len] =
+                            LEAF | bvh2.primitive_indices[(node.first_index + i) as usize];
+                        len += 1;
+                    }
                 } else {
                     let idx = top.nodes.len();
                     top.nodes.push(Node8::EMPTY);
-                    refs.push(idx as Ref);
+                    assert!(len < WIDTH, "at most eight children");
+                    refs[len] = idx as Ref;
+                    len += 1;
                     work.push((k, idx, level + 1));
                 }
             }
-            assert!(refs.len() <= WIDTH, "a leaf holds one primitive");
-            for (c, r) in refs.into_iter().enumerate() {
-                top.nodes[slot].child[c] = r;
-            }
+            top.nodes[slot].child = refs;
         }
         // Exact boxes, children before parents (children are pushed after their parent).
         let mut content = vec![NONE; top.nodes.len()];
