@@ -75,7 +75,10 @@ impl<'a> Collapse<'a> {
         };
         let mut waiting = Vec::new();
         for i in (0..n).rev() {
-            prefetch::prefetch(i.checked_sub(prefetch::AHEAD).and_then(|a| bvh2.nodes.get(a)));
+            prefetch::prefetch(
+                i.checked_sub(prefetch::AHEAD)
+                    .and_then(|a| bvh2.nodes.get(a)),
+            );
             if !solve(i, &mut done) {
                 waiting.push(i);
             }

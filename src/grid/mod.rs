@@ -31,7 +31,6 @@ use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{split_off, DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use crate::oct::{oct_decode, oct_encode_all};
-use crate::prefetch;
 use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
@@ -141,12 +140,12 @@ struct Best {
     b2: f32,
 }
 
-/// A block as planned: its region (index in [`DicedMesh::grids`]), where it starts in the
-/// region's grid, and its header.
+/// Where a planned block lies: its region (index in [`DicedMesh::grids`]) and where it
+/// starts in the region's grid (its header is apart, in [`GridMesh::blocks`]).
+#[derive(Clone, Copy)]
 struct Planned {
     region: u32,
-    origin: [usize; 2],
-    header: Block,
+    origin: [u32; 2],
 }
 
 /// Splits `n` quads into runs of at most [`BLOCK`], as even as possible, even lengths first:
@@ -175,7 +174,7 @@ fn blocks_of(g: &GridRegion) -> usize {
 
 /// Appends the blocks of region `region` (`g`) to `out`: their headers, without offsets
 /// (nothing is read from the diced mesh).
-fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>) {
+fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>, headers: &mut Vec<Block>) {
     let [qc, qr] = g.part.quads.map(|x| x as usize);
     for (y0, rows) in runs(qr) {
         for (x0, cols) in runs(qc) {
@@ -194,9 +193,9 @@ fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>) {
             };
             out.push(Planned {
                 region: region as u32,
-                origin: [x0, y0],
-                header,
+                origin: [x0 as u32, y0 as u32],
             });
+            headers.push(header);
         }
     }
 }
@@ -227,13 +226,13 @@ fn fill_block(
     d: &DicedMesh,
     levels: Option<&[u8]>,
     codes: &[u32],
-    p: &Planned,
+    p: Planned,
+    h: &Block,
     out: BlockSlices,
 ) -> Box4 {
     let g = &d.grids[p.region as usize];
-    let h = &p.header;
     let (cols, rows) = (h.cols as usize, h.rows as usize);
-    let [x0, y0] = p.origin;
+    let [x0, y0] = p.origin.map(|x| x as usize);
     let mut row = [0u32; BLOCK + 1];
     let row = &mut row[..=cols];
     for y in 0..=rows {
@@ -272,9 +271,9 @@ fn fill_block(
 }
 
 impl GridMesh {
-    /// Builds the grid mesh of `d`; the diced mesh is not kept. Block headers and loose
-    /// triangles are stored in the order of the top level's leaves, the blocks' vertices,
-    /// normals, boxes and levels region by region, as the blocks were planned. Fails when the
+    /// Builds the grid mesh of `d`; the diced mesh is not kept. Everything is stored region
+    /// by region, as the blocks were planned: block headers, vertices, normals, boxes and
+    /// levels, then the loose triangles in strips in id order. Fails when the
     /// mesh needs more than 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
     pub fn build(d: &DicedMesh) -> Result<GridMesh> {
         Self::build_from(d, None, None)
@@ -298,17 +297,17 @@ impl GridMesh {
     ) -> Result<GridMesh> {
         // Plan the blocks (headers, then their offsets in region order), store each in place,
         // in parallel, and take its bounds from its root box; the top level is built over
-        // those bounds and only the headers are then put in its order.
-        let mut plans: Vec<Planned> =
-            Vec::with_capacity(d.grids.iter().map(blocks_of).sum::<usize>());
+        // those bounds.
+        let nplanned = d.grids.iter().map(blocks_of).sum::<usize>();
+        let mut plans: Vec<Planned> = Vec::with_capacity(nplanned);
+        let mut headers: Vec<Block> = Vec::with_capacity(nplanned);
         for (i, g) in d.grids.iter().enumerate() {
             if g.part.quads[0] > 0 && g.part.quads[1] > 0 {
-                plan_region(i, g, &mut plans);
+                plan_region(i, g, &mut plans, &mut headers);
             }
         }
         let (mut ncoords, mut nboxes, mut nlevels) = (0usize, 0usize, 0usize);
-        for p in &mut plans {
-            let h = &mut p.header;
+        for h in &mut headers {
             h.vert = ncoords as u32;
             h.boxes = nboxes as u32;
             if h.level & LEVEL_UNIFORM == 0 {
@@ -318,7 +317,6 @@ impl GridMesh {
             nboxes += h.num_boxes();
             nlevels += h.num_levels();
         }
-
         if plans.len() >= 1 << 24 {
             return Err(too_many(plans.len(), "grid blocks", "2^24"));
         }
@@ -351,13 +349,11 @@ impl GridMesh {
         // allocation's pages are first touched by the block that writes them, in parallel).
         m.boxes = bytemuck::zeroed_vec(nboxes);
         m.levels = vec![0; nlevels];
-
         {
             let mut jobs = Vec::with_capacity(plans.len());
             let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
             let (mut boxes, mut levels) = (&mut m.boxes[..], &mut m.levels[..]);
-            for p in &mut plans {
-                let h = &p.header;
+            for (&p, h) in plans.iter().zip(&mut headers) {
                 let nv = h.num_vertices();
                 let out = BlockSlices {
                     coords: split_off(&mut coords, 3 * nv),
@@ -365,17 +361,18 @@ impl GridMesh {
                     boxes: split_off(&mut boxes, h.num_boxes()),
                     levels: split_off(&mut levels, h.num_levels()),
                 };
-                jobs.push((p, out));
+                jobs.push((p, h, out));
             }
-            jobs.into_par_iter().with_min_len(16).for_each(|(p, out)| {
-                p.header.root = fill_block(d, tri_levels, codes, p, out);
-            });
+            jobs.into_par_iter()
+                .with_min_len(16)
+                .for_each(|(p, h, out)| {
+                    h.root = fill_block(d, tri_levels, codes, p, h, out);
+                });
         }
-
         // Each block's bounds: the union of its root's children (absent ones are empty).
-        let mut prim_boxes: Vec<top::Bounds> = plans
+        let mut prim_boxes: Vec<top::Bounds> = headers
             .iter()
-            .map(|p| (0..4).fold(top::NONE, |b, c| top::union(b, p.header.root.child(c))))
+            .map(|h| (0..4).fold(top::NONE, |b, c| top::union(b, h.root.child(c))))
             .collect();
         let mut loose = Vec::new();
         // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
@@ -427,57 +424,19 @@ impl GridMesh {
             return Ok(m);
         }
         let bounds = prim_boxes;
-        let mut top = Top::build(&bounds);
-
-        // Place block headers and strips in the order a depth-first walk meets them.
-        let mut order = Vec::with_capacity(bounds.len());
-        let mut stack = vec![top.root];
-        while let Some(r) = stack.pop() {
-            if r == top::EMPTY {
-                continue;
-            }
-            if r & top::LEAF != 0 {
-                order.push((r & !top::LEAF) as usize);
-            } else {
-                stack.extend(top.nodes[r as usize].child.iter().rev());
-            }
-        }
-        let nblocks = plans.len();
-        m.blocks.reserve(nblocks);
-        m.loose.reserve(loose.len());
-        let mut new_id = vec![0u32; bounds.len()];
-        for (i, &prim) in order.iter().enumerate() {
-            // The headers are gathered in the tree's order: ask for one a few ahead.
-            if let Some(&ahead) = order.get(i + prefetch::AHEAD) {
-                prefetch::prefetch(plans.get(ahead).map(|p| &p.header));
-            }
-            if prim < nblocks {
-                let h = plans[prim].header;
-                new_id[prim] = m.blocks.len() as u32;
-                m.quadrants
-                    .push(if h.two_level() { h.boxes } else { u32::MAX });
-                m.verts.push(h.vert);
-                m.blocks.push(h);
-            } else {
-                let [first, count] = strips[prim - nblocks];
-                new_id[prim] = (nblocks + m.strips.len()) as u32;
-                m.strips.push([m.loose.len() as u32, count]);
-                m.loose
-                    .extend_from_slice(&loose[first as usize..(first + count) as usize]);
-            }
-        }
-        fn renumber(r: top::Ref, new_id: &[u32]) -> top::Ref {
-            if r != top::EMPTY && r & top::LEAF != 0 {
-                top::LEAF | new_id[(r & !top::LEAF) as usize]
-            } else {
-                r
-            }
-        }
-        top.root = renumber(top.root, &new_id);
-        for n in &mut top.nodes {
-            n.child = n.child.map(|r| renumber(r, &new_id));
-        }
-
+        let top = Top::build(&bounds);
+        // Block headers and strips stay in the order they were made (the mesh's), the order
+        // of the blocks' vertices: put in the top level's depth-first order instead, the
+        // headers cost the 316² grid 10 ms of gathering and the rays nothing (the same rays
+        // per second within 3%, BENCHMARKS.md, fourteenth step).
+        m.quadrants = headers
+            .iter()
+            .map(|h| if h.two_level() { h.boxes } else { u32::MAX })
+            .collect();
+        m.verts = headers.iter().map(|h| h.vert).collect();
+        m.blocks = headers;
+        m.strips = strips;
+        m.loose = loose;
         m.top = top;
         Ok(m)
     }

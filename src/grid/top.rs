@@ -138,8 +138,7 @@ impl Top {
                 if node.is_leaf() {
                     for i in 0..node.prim_count {
                         assert!(len < WIDTH, "a leaf holds one primitive");
-                        refs[len] =
-                            LEAF | bvh2.primitive_indices[(node.first_index + i) as usize];
+                        refs[len] = LEAF | bvh2.primitive_indices[(node.first_index + i) as usize];
                         len += 1;
                     }
                 } else {
