@@ -132,37 +132,29 @@ impl PatchTable {
                 self.add_stam(slot, corner, &verts, depth);
                 None
             }
-            Found::Direct(kind) => {
-                let first = self.direct.len() as u32;
-                let verts = direct.next().expect("a direct patch's 16 vertices");
-                self.direct.extend(verts.iter().map(|&v| offset + v));
+            Found::Direct(kind) | Found::Regular(kind) => {
+                let is_direct = matches!(found, Found::Direct(_));
+                let first = if is_direct {
+                    let first = self.direct.len() as u32;
+                    let verts = direct.next().expect("a direct patch's 16 vertices");
+                    self.direct.extend(verts.iter().map(|&v| offset + v));
+                    first
+                } else {
+                    let first = self.point_stencils.len() as u32;
+                    for _ in 0..16 {
+                        let row = rows.next().expect("a regular patch's 16 rows");
+                        self.point_stencils
+                            .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
+                    }
+                    first
+                };
                 self.add_leaf(
                     slot,
                     Patch {
                         kind: patch_kind(kind),
                         level: depth as u8,
                         first_point: first,
-                        direct: true,
-                        end_cap: 0,
-                        ..Patch::UNSET
-                    },
-                );
-                None
-            }
-            Found::Regular(kind) => {
-                let first = self.point_stencils.len() as u32;
-                for _ in 0..16 {
-                    let row = rows.next().expect("a regular patch's 16 rows");
-                    self.point_stencils
-                        .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
-                }
-                self.add_leaf(
-                    slot,
-                    Patch {
-                        kind: patch_kind(kind),
-                        level: depth as u8,
-                        first_point: first,
-                        direct: false,
+                        direct: is_direct,
                         end_cap: 0,
                         ..Patch::UNSET
                     },
