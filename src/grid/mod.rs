@@ -335,7 +335,6 @@ impl GridMesh {
                 &encoded[..]
             }
         };
-
         let mut m = GridMesh {
             triangles: d.triangles.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
@@ -415,7 +414,6 @@ impl GridMesh {
                 level: info.level,
             });
         }
-
         m.bounds = prim_boxes.iter().fold(m.bounds, |a, &b| top::union(a, b));
         if loose.len() >= 1 << 31 {
             return Err(too_many(loose.len(), "loose triangles", "2^31"));
