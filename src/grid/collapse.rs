@@ -247,4 +247,71 @@ mod tests {
             assert!(got <= want * (1.0 + 1e-5), "case {case}: {got} > {want}");
         }
     }
+
+    /// Binary nodes numbered in any order (here every sibling pair moved before its parent's,
+    /// the reverse of the builder's order, so that nearly every node waits for a pass over
+    /// the waiting ones): the same collapse, node for node.
+    #[test]
+    fn collapse_is_the_same_in_any_node_order() {
+        let mut rng = SplitMix64(41);
+        for case in 0..20 {
+            let count = 20 + 37 * case;
+            let boxes: Vec<Aabb> = (0..count)
+                .map(|_| {
+                    let c = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 10.0));
+                    let e = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 2.0));
+                    Aabb::new(c, c + e)
+                })
+                .collect();
+            let mut params = BvhBuildParams::fast_build();
+            params.pre_split = false;
+            params.max_prims_per_leaf = 1;
+            let bvh2 = build_bvh2(&boxes, params, &mut std::time::Duration::default());
+            // Sibling pairs (they start at inner nodes' `first_index`) laid out in reverse.
+            let mut starts: Vec<usize> = bvh2
+                .nodes
+                .iter()
+                .filter(|n| n.prim_count == 0)
+                .map(|n| n.first_index as usize)
+                .collect();
+            starts.sort_unstable();
+            let mut map = vec![0usize; bvh2.nodes.len()];
+            for (k, &s) in starts.iter().enumerate() {
+                let to = 1 + 2 * (starts.len() - 1 - k);
+                map[s] = to;
+                map[s + 1] = to + 1;
+            }
+            let mut moved = bvh2.clone();
+            for (old, node) in bvh2.nodes.iter().enumerate() {
+                let mut node = *node;
+                if node.prim_count == 0 {
+                    node.first_index = map[node.first_index as usize] as u32;
+                }
+                moved.nodes[map[old]] = node;
+            }
+            let before = bvh2
+                .nodes
+                .iter()
+                .enumerate()
+                .filter(|(i, n)| n.prim_count == 0 && (n.first_index as usize) < *i)
+                .count();
+            let after = moved
+                .nodes
+                .iter()
+                .enumerate()
+                .filter(|(i, n)| n.prim_count == 0 && (n.first_index as usize) < *i)
+                .count();
+            assert!(
+                after > before,
+                "case {case}: children moved before their parents"
+            );
+            let (a, b) = (Collapse::new(&bvh2), Collapse::new(&moved));
+            let nodes = made(&a, 0);
+            assert_eq!(nodes.len(), made(&b, 0).len(), "case {case}");
+            for &n in &nodes {
+                let want: Vec<usize> = a.children(n).iter().map(|&k| map[k]).collect();
+                assert_eq!(b.children(map[n]), want, "case {case}, node {n}");
+            }
+        }
+    }
 }

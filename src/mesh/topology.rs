@@ -623,4 +623,57 @@ mod tests {
         let t = Topology::new(6, &[0, 4, 8], &[0, 1, 2, 3, 0, 1, 4, 5]).unwrap();
         assert!(t.edge_nonmanifold[t.find_edge(0, 1).unwrap() as usize]);
     }
+
+    /// Edges of random meshes (faces of 3–6 vertices from a small pool, so pairs repeat,
+    /// faces repeat vertices, and edges are shared by one to many faces): each face-edge's edge
+    /// joins its two vertices; edges are numbered in the order of their unordered pair; a pair
+    /// that no face uses twice and that is not degenerate is one edge, manifold only with two
+    /// uses in opposite directions; degenerate pairs and a pair used twice by one face are
+    /// non-manifold.
+    #[test]
+    fn edges_are_numbered_by_pair_and_shared() {
+        let mut rng = crate::harness::rng::SplitMix64(17);
+        for case in 0..300 {
+            let pool = 4 + rng.below(12) as u32;
+            let mut off = vec![0u32];
+            let mut fv = Vec::new();
+            for _ in 0..1 + rng.below(12) {
+                for _ in 0..3 + rng.below(4) {
+                    fv.push(rng.below(pool as usize) as u32);
+                }
+                off.push(fv.len() as u32);
+            }
+            let t = Topology::new(pool as usize, &off, &fv).unwrap();
+            let pair = |e: u32| {
+                let [a, b] = t.edge_verts[e as usize];
+                (a.min(b), a.max(b))
+            };
+            let mut uses: std::collections::BTreeMap<(u32, u32), Vec<(usize, u32)>> =
+                Default::default();
+            for f in 0..t.num_faces() {
+                let vs = t.face_vertices(f);
+                for (i, &e) in t.face_edge_list(f).iter().enumerate() {
+                    let (a, b) = (vs[i], vs[(i + 1) % vs.len()]);
+                    assert_eq!(pair(e), (a.min(b), a.max(b)), "case {case}");
+                    uses.entry(pair(e)).or_default().push((f, e));
+                }
+            }
+            for e in 1..t.num_edges() as u32 {
+                assert!(pair(e - 1) <= pair(e), "case {case}: edges by pair");
+            }
+            for ((a, b), used) in &uses {
+                let mut faces: Vec<usize> = used.iter().map(|u| u.0).collect();
+                faces.dedup();
+                let edges: std::collections::BTreeSet<u32> = used.iter().map(|u| u.1).collect();
+                if a == b || faces.len() < used.len() {
+                    assert!(
+                        edges.iter().all(|&e| t.edge_nonmanifold[e as usize]),
+                        "case {case}: ({a}, {b})"
+                    );
+                } else {
+                    assert_eq!(edges.len(), 1, "case {case}: ({a}, {b}) is one edge");
+                }
+            }
+        }
+    }
 }
