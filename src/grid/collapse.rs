@@ -209,6 +209,20 @@ mod tests {
         best
     }
 
+    /// A binary BVH of `count` random boxes (one per leaf), built with `params`.
+    fn random_tree(rng: &mut SplitMix64, count: usize, mut params: BvhBuildParams) -> Bvh2 {
+        let boxes: Vec<Aabb> = (0..count)
+            .map(|_| {
+                let c = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 10.0));
+                let e = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 2.0));
+                Aabb::new(c, c + e)
+            })
+            .collect();
+        params.pre_split = false;
+        params.max_prims_per_leaf = 1;
+        build_bvh2(&boxes, params, &mut std::time::Duration::default())
+    }
+
     /// On random scenes small enough to try every collapse, the planned one is valid (at
     /// most eight children per node, every primitive once) and its sum of node areas is the
     /// least there is (to `f32` rounding of the sums, 1e-5 relative).
@@ -217,17 +231,7 @@ mod tests {
         let mut rng = SplitMix64(40);
         for case in 0..60 {
             let count = 9 + case % 8;
-            let boxes: Vec<Aabb> = (0..count)
-                .map(|_| {
-                    let c = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 10.0));
-                    let e = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 2.0));
-                    Aabb::new(c, c + e)
-                })
-                .collect();
-            let mut params = BvhBuildParams::medium_build();
-            params.pre_split = false;
-            params.max_prims_per_leaf = 1;
-            let bvh2 = build_bvh2(&boxes, params, &mut std::time::Duration::default());
+            let bvh2 = random_tree(&mut rng, count, BvhBuildParams::medium_build());
             let c = Collapse::new(&bvh2);
             let nodes = made(&c, 0);
             let mut prims: Vec<usize> = Vec::new();
@@ -256,17 +260,7 @@ mod tests {
         let mut rng = SplitMix64(41);
         for case in 0..20 {
             let count = 20 + 37 * case;
-            let boxes: Vec<Aabb> = (0..count)
-                .map(|_| {
-                    let c = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 10.0));
-                    let e = Vec3A::from([(); 3].map(|_| rng.next_f64() as f32 * 2.0));
-                    Aabb::new(c, c + e)
-                })
-                .collect();
-            let mut params = BvhBuildParams::fast_build();
-            params.pre_split = false;
-            params.max_prims_per_leaf = 1;
-            let bvh2 = build_bvh2(&boxes, params, &mut std::time::Duration::default());
+            let bvh2 = random_tree(&mut rng, count, BvhBuildParams::fast_build());
             // Sibling pairs (they start at inner nodes' `first_index`) laid out in reverse.
             let mut starts: Vec<usize> = bvh2
                 .nodes
@@ -289,20 +283,16 @@ mod tests {
                 }
                 moved.nodes[map[old]] = node;
             }
-            let before = bvh2
-                .nodes
-                .iter()
-                .enumerate()
-                .filter(|(i, n)| n.prim_count == 0 && (n.first_index as usize) < *i)
-                .count();
-            let after = moved
-                .nodes
-                .iter()
-                .enumerate()
-                .filter(|(i, n)| n.prim_count == 0 && (n.first_index as usize) < *i)
-                .count();
+            // Inner nodes whose children come before them.
+            let early = |t: &Bvh2| {
+                t.nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, n)| n.prim_count == 0 && (n.first_index as usize) < *i)
+                    .count()
+            };
             assert!(
-                after > before,
+                early(&moved) > early(&bvh2),
                 "case {case}: children moved before their parents"
             );
             let (a, b) = (Collapse::new(&bvh2), Collapse::new(&moved));
