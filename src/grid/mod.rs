@@ -443,31 +443,19 @@ impl GridMesh {
     /// quadrant nodes and its vertices.
     #[inline(always)]
     fn prefetch(&self, prim: u32) {
-        #[cfg(target_arch = "x86_64")]
+        use crate::prefetch::prefetch_bytes;
         if let Some(b) = self.blocks.get(prim as usize) {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let lines = |p: *const i8, bytes: usize| {
-                for l in 0..bytes.div_ceil(64) {
-                    // SAFETY: prefetching never faults and has no effect on memory.
-                    unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * l)) };
-                }
-            };
-            lines(b as *const Block as *const i8, std::mem::size_of::<Block>());
+            prefetch_bytes(b as *const Block, std::mem::size_of::<Block>());
             let q = self.quadrants[prim as usize];
             if q != u32::MAX {
-                lines(
-                    self.boxes.as_ptr().wrapping_add(q as usize) as *const i8,
+                prefetch_bytes(
+                    self.boxes.as_ptr().wrapping_add(q as usize),
                     4 * std::mem::size_of::<Box4>(),
                 );
             }
             let v = self.verts[prim as usize] as usize;
-            lines(
-                self.coords.as_ptr().wrapping_add(v) as *const i8,
-                12 * b.num_vertices(),
-            );
+            prefetch_bytes(self.coords.as_ptr().wrapping_add(v), 12 * b.num_vertices());
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = prim;
     }
 
     /// Prefetches what the hit record of quad `(x, y)` of block `b` reads beyond the block's
