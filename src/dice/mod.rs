@@ -349,22 +349,44 @@ fn eval_point(
 /// The diced point at `at` of position `p` and normal `n`, rounded to `f32`; an error where
 /// `p` is out of the numeric range.
 fn rounded(at: FaceCoord, p: [f64; 3], n: [f64; 3]) -> Result<Point> {
-    if !crate::numeric::in_range(p) {
-        let FaceCoord { face, k, u, v } = at;
-        return Err(Error::new(
-            ErrorKind::Usage,
-            format!(
-                "face {face}: the displaced point {p:?} at ({k}, {u}, {v}) is outside the numeric \
-                 range ±{:e}",
-                crate::numeric::MAX_COORD
-            ),
-        ));
+    in_range(at, p)?;
+    Ok(point(at, p, n))
+}
+
+/// An error where position `p` at `at` is out of the numeric range.
+#[inline(always)]
+fn in_range(at: FaceCoord, p: [f64; 3]) -> Result<()> {
+    if crate::numeric::in_range(p) {
+        Ok(())
+    } else {
+        Err(out_of_range(at, p))
     }
-    Ok(Point {
+}
+
+/// [`rounded`] of a point known to be in range: a `Point`, not a `Result` (moved through
+/// memory, a `Result<Point>` is read back with wider loads than its stores: a stall a point).
+#[inline(always)]
+fn point(at: FaceCoord, p: [f64; 3], n: [f64; 3]) -> Point {
+    Point {
         p: p.map(|x| x as f32),
         n: n.map(|x| x as f32),
         param: at,
-    })
+    }
+}
+
+/// The error of a diced point at `at` whose position `p` is out of the numeric range.
+#[cold]
+#[inline(never)]
+fn out_of_range(at: FaceCoord, p: [f64; 3]) -> Error {
+    let FaceCoord { face, k, u, v } = at;
+    Error::new(
+        ErrorKind::Usage,
+        format!(
+            "face {face}: the displaced point {p:?} at ({k}, {u}, {v}) is outside the numeric \
+             range ±{:e}",
+            crate::numeric::MAX_COORD
+        ),
+    )
 }
 
 /// The point at fraction `t ∈ [0, 1]` along face edge `m` of face `f` (from its vertex `m`
@@ -904,7 +926,9 @@ impl LatticeScratch {
     ) -> Result<()> {
         normals::unit_normals(table, &self.points, &at, &mut self.normals)?;
         for (i, (pt, &n)) in self.points.iter().zip(&self.normals).enumerate() {
-            put(i, rounded(at(i), pt.p, n)?);
+            let at = at(i);
+            in_range(at, pt.p)?;
+            put(i, point(at, pt.p, n));
         }
         Ok(())
     }

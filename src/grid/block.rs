@@ -147,49 +147,152 @@ pub fn slot(b: &Block, node: usize, c: usize) -> Slot {
     }
 }
 
-/// Builds the boxes of a block whose vertex `(x, y)` is `p(x, y)`: the root, then the
-/// quadrants' nodes if any.
-pub fn block_boxes(b: &Block, p: impl Fn(usize, usize) -> [f32; 3]) -> Vec<Box4> {
-    let [wc, wr] = b.windows();
+/// The boxes of block `b` whose vertices are stored as planes in `coords` (coordinate `a` of
+/// vertex `(x, y)` at `coords[(3 * y + a) * (cols + 1) + x]`, as [`super::GridMesh`] stores
+/// them): the root, returned, and the quadrants' nodes, written to `quadrants` (its
+/// [`Block::num_boxes`] nodes). Each window's box is found once per axis from its three rows
+/// merged column by column (a row past the block repeats its last, a column its last), then
+/// gives its quadrant's child and a part of the root's.
+pub fn plane_boxes(b: &Block, coords: &[f32], quadrants: &mut [Box4]) -> Box4 {
     let (cols, rows) = (b.cols as usize, b.rows as usize);
-    let window_box = |bx: &mut Box4, c: usize, wx: usize, wy: usize| {
-        for y in 2 * wy..=(2 * wy + 2).min(rows) {
-            for x in 2 * wx..=(2 * wx + 2).min(cols) {
-                bx.include(c, p(x, y));
+    let [wc, wr] = b.windows();
+    let width = cols + 1;
+    let two = b.two_level();
+    let mut root = Box4::default();
+    let mut quads = [Box4::default(); 4];
+    // Plain comparisons (`minps`, `maxps`): the coordinates are finite, and on ties these
+    // keep the first operand, as `f32::min` and `f32::max` do. Reducing each window's rows
+    // first, then the rows in order, keeps the first extreme in row-major order, as point by
+    // point (signed zeros included).
+    let min = |a: f32, b: f32| if b < a { b } else { a };
+    let max = |a: f32, b: f32| if b > a { b } else { a };
+    for a in 0..3 {
+        // Per vertex row, its extremes over each window's three columns (a column past the
+        // block repeats the last).
+        let mut row_lo = [[0f32; BLOCK / 2]; BLOCK + 1];
+        let mut row_hi = [[0f32; BLOCK / 2]; BLOCK + 1];
+        for y in 0..=rows {
+            let row = &coords[(3 * y + a) * width..][..width];
+            if let Ok(p) = <&[f32; BLOCK + 1]>::try_from(row) {
+                // A full row: every window's columns are in it.
+                row_lo[y] = std::array::from_fn(|w| min(min(p[2 * w], p[2 * w + 1]), p[2 * w + 2]));
+                row_hi[y] = std::array::from_fn(|w| max(max(p[2 * w], p[2 * w + 1]), p[2 * w + 2]));
+            } else {
+                let p = |x: usize| row[x.min(cols)];
+                row_lo[y] = std::array::from_fn(|w| min(min(p(2 * w), p(2 * w + 1)), p(2 * w + 2)));
+                row_hi[y] = std::array::from_fn(|w| max(max(p(2 * w), p(2 * w + 1)), p(2 * w + 2)));
             }
         }
-    };
-    if !b.two_level() {
-        let mut bx = Box4::default();
         for wy in 0..wr {
+            // The window row's three vertex rows (a row past the block repeats the last).
+            let [y0, y1, y2] = [0, 1, 2].map(|dy| (2 * wy + dy).min(rows));
             for wx in 0..wc {
-                window_box(&mut bx, 2 * wy + wx, wx, wy);
-            }
-        }
-        return vec![bx];
-    }
-    let mut out = vec![Box4::default(); 5];
-    for q in 0..4 {
-        for c in 0..4 {
-            let (wx, wy) = (2 * (q % 2) + c % 2, 2 * (q / 2) + c / 2);
-            if wx < wc && wy < wr {
-                // The window's box, once: its quadrant's child and a part of the root's.
-                let mut w = Box4::default();
-                window_box(&mut w, 0, wx, wy);
-                let [lo, hi] = w.child(0);
-                for (node, child) in [(1 + q, c), (0, q)] {
-                    out[node].include(child, lo);
-                    out[node].include(child, hi);
+                let l = min(min(row_lo[y0][wx], row_lo[y1][wx]), row_lo[y2][wx]);
+                let h = max(max(row_hi[y0][wx], row_hi[y1][wx]), row_hi[y2][wx]);
+                if two {
+                    let (q, c) = (2 * (wy / 2) + wx / 2, 2 * (wy % 2) + wx % 2);
+                    quads[q].lo[a][c] = l;
+                    quads[q].hi[a][c] = h;
+                    root.lo[a][q] = min(root.lo[a][q], l);
+                    root.hi[a][q] = max(root.hi[a][q], h);
+                } else {
+                    root.lo[a][2 * wy + wx] = l;
+                    root.hi[a][2 * wy + wx] = h;
                 }
             }
         }
     }
-    out
+    if two {
+        quadrants.copy_from_slice(&quads);
+    }
+    root
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The boxes of a block whose vertex `(x, y)` is `p(x, y)`, point by point: the root,
+    /// then the quadrants' nodes if any (the reference for [`plane_boxes`]).
+    fn block_boxes(b: &Block, p: impl Fn(usize, usize) -> [f32; 3]) -> Vec<Box4> {
+        let [wc, wr] = b.windows();
+        let (cols, rows) = (b.cols as usize, b.rows as usize);
+        let window_box = |bx: &mut Box4, c: usize, wx: usize, wy: usize| {
+            for y in 2 * wy..=(2 * wy + 2).min(rows) {
+                for x in 2 * wx..=(2 * wx + 2).min(cols) {
+                    bx.include(c, p(x, y));
+                }
+            }
+        };
+        if !b.two_level() {
+            let mut bx = Box4::default();
+            for wy in 0..wr {
+                for wx in 0..wc {
+                    window_box(&mut bx, 2 * wy + wx, wx, wy);
+                }
+            }
+            return vec![bx];
+        }
+        let mut out = vec![Box4::default(); 5];
+        for q in 0..4 {
+            for c in 0..4 {
+                let (wx, wy) = (2 * (q % 2) + c % 2, 2 * (q / 2) + c / 2);
+                if wx < wc && wy < wr {
+                    // The window's box, once: its quadrant's child and a part of the root's.
+                    let mut w = Box4::default();
+                    window_box(&mut w, 0, wx, wy);
+                    let [lo, hi] = w.child(0);
+                    for (node, child) in [(1 + q, c), (0, q)] {
+                        out[node].include(child, lo);
+                        out[node].include(child, hi);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// [`plane_boxes`] equals the point-by-point reference bit for bit on random blocks of
+    /// every size from 1×1 to 8×8 quads (zeros of both signs among the coordinates).
+    #[test]
+    fn plane_boxes_are_the_points_boxes() {
+        let mut rng = crate::harness::rng::SplitMix64(7);
+        for cols in 1..=BLOCK as u8 {
+            for rows in 1..=BLOCK as u8 {
+                for _ in 0..20 {
+                    let b = Block {
+                        cols,
+                        rows,
+                        ..Block::default()
+                    };
+                    let width = cols as usize + 1;
+                    let coords: Vec<f32> = (0..3 * width * (rows as usize + 1))
+                        .map(|_| {
+                            let r = rng.next_f64();
+                            if r < 0.03 {
+                                0.0
+                            } else if r < 0.06 {
+                                -0.0
+                            } else {
+                                ((r - 0.5) * 100.0) as f32
+                            }
+                        })
+                        .collect();
+                    let want = block_boxes(&b, |x, y| {
+                        std::array::from_fn(|a| coords[(3 * y + a) * width + x])
+                    });
+                    let mut quadrants = vec![Box4::default(); b.num_boxes()];
+                    let root = plane_boxes(&b, &coords, &mut quadrants);
+                    let bits = |x: &Box4| [x.lo, x.hi].map(|p| p.map(|r| r.map(f32::to_bits)));
+                    assert_eq!(bits(&root), bits(&want[0]), "{cols}x{rows} root");
+                    for (q, w) in quadrants.iter().zip(&want[1..]) {
+                        assert_eq!(bits(q), bits(w), "{cols}x{rows} quadrant");
+                    }
+                    assert_eq!(quadrants.len() + 1, want.len());
+                }
+            }
+        }
+    }
 
     #[test]
     fn slots_cover_the_windows() {

@@ -31,7 +31,7 @@ use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{split_off, DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
 use crate::oct::{oct_decode, oct_encode_all};
-use block::{block_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
+use block::{plane_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
 use top::Top;
@@ -245,11 +245,7 @@ fn fill_block(
             out.normals[y * (cols + 1) + x] = codes[v as usize];
         }
     }
-    let coords = &*out.coords;
-    let boxes = block_boxes(h, |x, y| {
-        std::array::from_fn(|a| coords[(3 * y + a) * (cols + 1) + x])
-    });
-    out.boxes.copy_from_slice(&boxes[1..]);
+    let root = plane_boxes(h, out.coords, out.boxes);
     match g.level {
         // One patch: one level, in the header (the triangles' records are not read).
         Some(_) => debug_assert!(out.levels.is_empty()),
@@ -267,7 +263,7 @@ fn fill_block(
             }
         }
     }
-    boxes[0]
+    root
 }
 
 impl GridMesh {
