@@ -111,31 +111,44 @@ impl PatchTable {
             .expect("the table holds the matrices of its Stam patches")
     }
 
-    /// An error when `at` is outside the table's domains.
+    /// An error when `at` is outside the table's domains. Inlined, its error made apart
+    /// ([`Self::check_error`]): called out of line, a `FaceCoord` stored by its caller field
+    /// by field is read back with wider loads, a store-forwarding stall a point.
+    #[inline(always)]
     fn check(&self, at: FaceCoord) -> Result<()> {
         let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
+        let inside = face < self.num_faces()
+            && k < self.sub_faces(face)
+            && (0.0..=1.0).contains(&u)
+            && (0.0..=1.0).contains(&v);
+        if inside {
+            Ok(())
+        } else {
+            Err(self.check_error(at))
+        }
+    }
+
+    /// [`Self::check`]'s error: what is out of range at `at`.
+    #[cold]
+    #[inline(never)]
+    fn check_error(&self, at: FaceCoord) -> Error {
+        let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
         if face >= self.num_faces() {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                format!("face {face} out of range"),
-            ));
+            return Error::new(ErrorKind::Usage, format!("face {face} out of range"));
         }
         if k >= self.sub_faces(face) {
-            return Err(Error::new(
+            return Error::new(
                 ErrorKind::Usage,
                 format!(
                     "face {face} has {} sub-face(s); k = {k} is out of range",
                     self.sub_faces(face)
                 ),
-            ));
+            );
         }
-        if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
-            return Err(Error::new(
-                ErrorKind::Usage,
-                format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
-            ));
-        }
-        Ok(())
+        Error::new(
+            ErrorKind::Usage,
+            format!("(u, v) = ({u}, {v}) is outside [0, 1]²"),
+        )
     }
 
     /// The leaf of the quadtree holding `at` (in range), its frame and `at` in the leaf's
@@ -152,6 +165,7 @@ impl PatchTable {
     }
 
     /// [`Self::leaf_index`], `None` in a hole.
+    #[inline(always)]
     pub(super) fn find_leaf(&self, at: FaceCoord) -> Option<(u32, Frame, f64, f64)> {
         self.descend_to_leaf::<true>(at)
     }
@@ -201,6 +215,7 @@ impl PatchTable {
     /// by the quadtree lookup alone where the leaf is a B-spline or single-crease patch (whose
     /// level is its own), by evaluation elsewhere (end caps and Stam patches report how deep
     /// their evaluation went).
+    #[inline]
     pub fn level_at(&self, at: FaceCoord) -> Result<u8> {
         if self.is_approximate() {
             return Ok(self.eval(at)?.level);
