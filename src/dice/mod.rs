@@ -1142,8 +1142,10 @@ impl DomainCtx<'_> {
                 out.put(first + i, q);
             }
         }
-        // A domain that is one patch has one level (no lookup per triangle).
+        // A domain that is one patch has one level (no lookup per triangle); elsewhere the last
+        // leaf's bounds and level serve the next triangles whose centres lie strictly inside.
         let whole = self.table.domain_level(f, k);
+        let mut leaf: Option<([f64; 4], u8)> = None;
         // Lean dicing writes of its grid triangles neither corners (the grid build reads the
         // frame) nor records, only the level, apart, and not even that where the domain is one
         // patch (its grid region carries the level).
@@ -1161,8 +1163,17 @@ impl DomainCtx<'_> {
                 Some(l) => l,
                 None => {
                     let [cu, cv] = pat.tri_centre[ti];
-                    self.table
-                        .level_at(FaceCoord::new(f as u32, k as u32, cu, cv))?
+                    match leaf {
+                        Some(([u0, v0, u1, v1], l)) if u0 < cu && cu < u1 && v0 < cv && cv < v1 => {
+                            l
+                        }
+                        _ => {
+                            let at = FaceCoord::new(f as u32, k as u32, cu, cv);
+                            let (l, extent) = self.table.level_and_extent(at)?;
+                            leaf = extent.map(|e| (e, l));
+                            l
+                        }
+                    }
                 }
             };
             if ti < unrecorded {
@@ -1185,6 +1196,53 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
     use crate::patch::{PatchOptions, PatchTable};
+
+    /// Every diced triangle's level is the table's level at its centre (`level_at`), on
+    /// meshes with quadtrees (creases, extraordinary vertices, n-gons), at uniform rates on
+    /// and off the trees' splits and at edge-length rates (zippers between rates): dicing
+    /// reuses a leaf's level for the next centres inside it. The centre is taken from the
+    /// `f32` corners, so centres within 1e-6 of a split of the first twelve levels are left
+    /// out (the `f64` centre dicing uses may lie on the other side).
+    #[test]
+    fn triangle_levels_are_the_centres_levels() {
+        let meshes = [
+            crate::mesh::shapes::rounded_box(2.0),
+            crate::mesh::shapes::gear(7),
+            crate::mesh::shapes::blob(),
+            crate::mesh::shapes::spindle(60),
+        ];
+        let near_split = |x: f64| {
+            let scaled = x * 4096.0;
+            (scaled - scaled.round()).abs() < 1e-6 * 4096.0
+        };
+        let mut checked = 0;
+        for mesh in &meshes {
+            let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
+            let rates = [
+                DiceRate::Uniform(3),
+                DiceRate::Uniform(4),
+                DiceRate::Uniform(7),
+                DiceRate::EdgeLength(0.05),
+            ];
+            for rate in rates {
+                let opts = DiceOptions {
+                    rate,
+                    ..DiceOptions::default()
+                };
+                let d = dice(&table, mesh, &opts).unwrap();
+                for t in &d.tri_info {
+                    let c = [0, 1].map(|a| t.uv.iter().map(|p| f64::from(p[a])).sum::<f64>() / 3.0);
+                    if c.iter().any(|&x| near_split(x)) {
+                        continue;
+                    }
+                    let at = FaceCoord::new(t.face, t.k, c[0], c[1]);
+                    assert_eq!(Ok(t.level), table.level_at(at), "{at:?}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 20000, "only {checked} triangles checked");
+    }
 
     /// A row's vertices, taken at once, are each point's [`GridRegion::vertex`]: every row of
     /// every grid region of a diced mesh (frame rows, inner rows, grids that leave a side to a

@@ -532,7 +532,7 @@ const CORNER_NUDGE: f64 = 1.0 / 1024.0;
 /// corner at `(0, 0)`): its depth `m`, its quadrant `q` within the `(m − 1)`-th corner
 /// descendant, the point's parameters in it, and that descendant's frame within the patch.
 /// `None` within `2^-MAX_DEPTH` of the corner, where the corner's limit position applies.
-fn locate(s: f64, t: f64) -> Option<(usize, usize, f64, f64, Frame)> {
+pub(crate) fn locate(s: f64, t: f64) -> Option<(usize, usize, f64, f64, Frame)> {
     let (mut s, mut t) = (s, t);
     let mut frame = Frame::UNIT;
     for m in 1..=MAX_DEPTH {

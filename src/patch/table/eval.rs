@@ -244,6 +244,39 @@ impl PatchTable {
         Ok(self.eval(at)?.level)
     }
 
+    /// [`Self::level_at`], with bounds `[u0, v0, u1, v1]` around `at` within which the level
+    /// is the same: the leaf's square where the level is the leaf's own (a B-spline or
+    /// single-crease leaf), the square of the regular sub-patch holding `at` in a Stam leaf
+    /// (whose level is the leaf's plus that sub-patch's depth). Every point strictly inside
+    /// the bounds has the level: the descents classify points exactly (each step subtracts a
+    /// corner and doubles, exact operations on these values), so a point strictly inside a
+    /// square reaches it. Dicing reuses the level for the next triangles whose centres lie
+    /// inside (no lookup each).
+    #[inline]
+    pub fn level_and_extent(&self, at: FaceCoord) -> Result<(u8, Option<[f64; 4]>)> {
+        if !self.is_approximate() && self.loop_surface.is_none() && self.check(at).is_ok() {
+            if let Some((p, frame, s, t)) = self.descend_to_leaf::<true>(at) {
+                let patch = &self.patches[p as usize];
+                match patch.kind {
+                    PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. } => {
+                        return Ok((patch.level, Some(square(&frame))));
+                    }
+                    PatchKind::Stam { corner, .. } => {
+                        let (rot, s1, t1) = stam_corner(corner, s, t);
+                        if s1 != 0.0 || t1 != 0.0 {
+                            if let Some((m, q, _, _, sub)) = stam::locate(s1, t1) {
+                                let box_frame = frame.then(&rot).then(&sub.child(q));
+                                return Ok((patch.level + m as u8, Some(square(&box_frame))));
+                            }
+                        }
+                    }
+                    PatchKind::EndCap => {}
+                }
+            }
+        }
+        Ok((self.level_at(at)?, None))
+    }
+
     /// The level [`Self::level_at`] gives everywhere in domain `(face, k)` when the whole
     /// domain is one B-spline or single-crease patch; `None` otherwise (or out of range).
     pub fn domain_level(&self, face: usize, k: usize) -> Option<u8> {
@@ -366,6 +399,24 @@ impl LeafParts for Recent {
     }
 }
 
+/// The bounds `[u0, v0, u1, v1]` of frame `f`'s unit square: its corners `o`, `o + a`,
+/// `o + b`, `o + a + b` (dyadic, so exact).
+fn square(f: &Frame) -> [f64; 4] {
+    let ends = |i: usize| {
+        let c = [
+            f.o[i],
+            f.o[i] + f.a[i],
+            f.o[i] + f.b[i],
+            f.o[i] + f.a[i] + f.b[i],
+        ];
+        let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi)
+    };
+    let ((u0, u1), (v0, v1)) = (ends(0), ends(1));
+    [u0, v0, u1, v1]
+}
+
 /// Patch `(s, t)` in the frame of a Stam patch whose extraordinary vertex is at corner
 /// `corner`: the frame mapping the local square back to the patch, and the local `(s', t')`
 /// with the extraordinary vertex at `(0, 0)`: `(s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c]`.
@@ -428,6 +479,51 @@ pub(super) mod tests {
             }
         }
         assert!(whole > 1000, "only {whole} samples in whole-patch domains");
+    }
+
+    /// `level_and_extent` gives `level_at`'s level, and where it gives bounds, every point
+    /// strictly inside them (random ones, and ones a rounding step inside the corners) has
+    /// that level and lies in the same leaf; the bounds are a dyadic square of the domain.
+    /// Stam leaves give bounds too (their sub-patches' squares).
+    #[test]
+    fn level_extent_holds_one_level() {
+        let mut rng = SplitMix64(23);
+        let mut bounded = 0;
+        for table in tables() {
+            for _ in 0..3000 {
+                let (f, k) = random_domain(&mut rng, &table);
+                let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
+                let (level, extent) = table.level_and_extent(at).unwrap();
+                assert_eq!(Ok(level), table.level_at(at), "{at:?}");
+                let Some([u0, v0, u1, v1]) = extent else {
+                    continue;
+                };
+                bounded += 1;
+                assert!(
+                    u0 <= at.u && at.u <= u1 && v0 <= at.v && at.v <= v1,
+                    "{at:?}"
+                );
+                let side = u1 - u0;
+                assert!(side > 0.0 && side == v1 - v0 && side.log2().fract() == 0.0);
+                let leaf = table.find_leaf(at).map(|l| l.0);
+                let up = |x: f64| x.next_up();
+                let down = |x: f64| x.next_down();
+                let mut inside = vec![(up(u0), up(v0)), (down(u1), down(v1)), (up(u0), down(v1))];
+                for _ in 0..4 {
+                    let (x, y) = (rng.next_f64(), rng.next_f64());
+                    inside.push((u0 + x * side, v0 + y * side));
+                }
+                for (u, v) in inside {
+                    if !(u0 < u && u < u1 && v0 < v && v < v1) {
+                        continue;
+                    }
+                    let p = FaceCoord::new(f as u32, k as u32, u, v);
+                    assert_eq!(table.level_at(p), Ok(level), "{p:?} in {extent:?}");
+                    assert_eq!(table.find_leaf(p).map(|l| l.0), leaf, "{p:?} in {extent:?}");
+                }
+            }
+        }
+        assert!(bounded > 2500, "only {bounded} samples with bounds");
     }
 
     /// `eval_d1` is `eval`'s position and first derivatives bit for bit (signs of zeros
