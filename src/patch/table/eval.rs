@@ -460,6 +460,12 @@ pub(super) mod tests {
         (f, rng.below(table.sub_faces(f)))
     }
 
+    /// A random point of a random domain of `table`.
+    fn random_point(rng: &mut SplitMix64, table: &PatchTable) -> FaceCoord {
+        let (f, k) = random_domain(rng, table);
+        FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64())
+    }
+
     /// `level_at` is `eval(..).level`, on meshes with B-spline, single-crease, Stam and
     /// end-cap leaves (extraordinary vertices, semi-sharp creases, n-gons).
     #[test]
@@ -468,11 +474,10 @@ pub(super) mod tests {
         let mut whole = 0;
         for table in tables() {
             for _ in 0..4000 {
-                let (f, k) = random_domain(&mut rng, &table);
-                let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
+                let at = random_point(&mut rng, &table);
                 let want = table.eval(at).map(|s| s.level).ok();
                 assert_eq!(table.level_at(at).ok(), want, "{at:?}");
-                if let Some(l) = table.domain_level(f, k) {
+                if let Some(l) = table.domain_level(at.face as usize, at.k as usize) {
                     assert_eq!(Some(l), want, "{at:?}");
                     whole += 1;
                 }
@@ -491,8 +496,7 @@ pub(super) mod tests {
         let mut bounded = 0;
         for table in tables() {
             for _ in 0..3000 {
-                let (f, k) = random_domain(&mut rng, &table);
-                let at = FaceCoord::new(f as u32, k as u32, rng.next_f64(), rng.next_f64());
+                let at = random_point(&mut rng, &table);
                 let (level, extent) = table.level_and_extent(at).unwrap();
                 assert_eq!(Ok(level), table.level_at(at), "{at:?}");
                 let Some([u0, v0, u1, v1]) = extent else {
@@ -517,7 +521,7 @@ pub(super) mod tests {
                     if !(u0 < u && u < u1 && v0 < v && v < v1) {
                         continue;
                     }
-                    let p = FaceCoord::new(f as u32, k as u32, u, v);
+                    let p = FaceCoord::new(at.face, at.k, u, v);
                     assert_eq!(table.level_at(p), Ok(level), "{p:?} in {extent:?}");
                     assert_eq!(table.find_leaf(p).map(|l| l.0), leaf, "{p:?} in {extent:?}");
                 }
