@@ -32,8 +32,8 @@ pub fn oct_encode(n: [f32; 3]) -> u32 {
 const LANES: usize = 8;
 
 /// [`oct_encode`] of every normal of `normals` into `codes` (of the same length): the same
-/// codes, eight normals side by side in lanes the compiler vectorises (AVX2 where
-/// detected), the rest one by one.
+/// codes, eight normals side by side (in AVX2 intrinsics where detected, else in lanes the
+/// compiler vectorises), the rest one by one.
 pub fn oct_encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
     assert_eq!(normals.len(), codes.len(), "one code per normal");
     #[cfg(target_arch = "x86_64")]
@@ -44,23 +44,15 @@ pub fn oct_encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
     encode_all(normals, codes)
 }
 
-/// [`encode_all`] compiled for AVX2.
+/// [`encode_all_with`] the AVX2 lanes ([`encode_lanes_avx2`]).
 ///
 /// # Safety
 /// The processor must have AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn encode_all_avx2(normals: &[[f32; 3]], codes: &mut [u32]) {
-    let mut n = normals.chunks_exact(LANES);
-    let mut c = codes.chunks_exact_mut(LANES);
-    for (n, c) in (&mut n).zip(&mut c) {
-        // SAFETY: AVX2 is present (this function's contract).
-        let lanes = unsafe { encode_lanes_avx2(n.try_into().expect("a chunk of LANES")) };
-        c.copy_from_slice(&lanes);
-    }
-    for (n, c) in n.remainder().iter().zip(c.into_remainder()) {
-        *c = oct_encode(*n);
-    }
+    // SAFETY: AVX2 is present (this function's contract).
+    encode_all_with(normals, codes, |n| unsafe { encode_lanes_avx2(n) })
 }
 
 /// [`encode_lanes`] written with AVX2 intrinsics, bit for bit: the same operations in the
@@ -189,13 +181,23 @@ unsafe fn encode_lanes_avx2(n: &[[f32; 3]; LANES]) -> [u32; LANES] {
     out.map(|c| c as u32)
 }
 
-/// [`oct_encode_all`] for whatever instructions the caller was compiled for.
-#[inline(always)]
+/// [`oct_encode_all`] with the compiler's lanes ([`encode_lanes`]), for whatever instructions
+/// the caller was compiled for.
 fn encode_all(normals: &[[f32; 3]], codes: &mut [u32]) {
+    encode_all_with(normals, codes, encode_lanes)
+}
+
+/// [`oct_encode_all`]: `lanes` on each run of [`LANES`] normals, the rest one by one.
+#[inline(always)]
+fn encode_all_with(
+    normals: &[[f32; 3]],
+    codes: &mut [u32],
+    lanes: impl Fn(&[[f32; 3]; LANES]) -> [u32; LANES],
+) {
     let mut n = normals.chunks_exact(LANES);
     let mut c = codes.chunks_exact_mut(LANES);
     for (n, c) in (&mut n).zip(&mut c) {
-        c.copy_from_slice(&encode_lanes(n.try_into().expect("a chunk of LANES")));
+        c.copy_from_slice(&lanes(n.try_into().expect("a chunk of LANES")));
     }
     for (n, c) in n.remainder().iter().zip(c.into_remainder()) {
         *c = oct_encode(*n);
