@@ -1197,6 +1197,30 @@ mod tests {
     use crate::mesh::generate;
     use crate::patch::{PatchOptions, PatchTable};
 
+    /// A displacement that throws diced points out of the numeric range is an error naming
+    /// the face and the point, not a mesh of infinite or huge coordinates; the same height
+    /// within range dices.
+    #[test]
+    fn a_point_displaced_out_of_range_is_refused() {
+        let mesh = crate::mesh::shapes::rounded_box(2.0);
+        let table = PatchTable::new(&mesh, PatchOptions::default()).unwrap();
+        let dice_at = |amplitude: f64| {
+            let opts = DiceOptions {
+                rate: DiceRate::Uniform(3),
+                displace: Some(Displacement::Noise {
+                    amplitude,
+                    frequency: 1.3,
+                }),
+                ..DiceOptions::default()
+            };
+            dice(&table, &mesh, &opts)
+        };
+        let err = dice_at(1e12).unwrap_err().to_string();
+        assert!(err.contains("outside the numeric range"), "{err}");
+        assert!(err.starts_with("face "), "{err}");
+        assert!(dice_at(0.1).is_ok());
+    }
+
     /// Every diced triangle's level is the table's level at its centre (`level_at`), on
     /// meshes with quadtrees (creases, extraordinary vertices, n-gons), at uniform rates on
     /// and off the trees' splits and at edge-length rates (zippers between rates): dicing
