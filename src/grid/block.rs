@@ -150,9 +150,9 @@ pub fn slot(b: &Block, node: usize, c: usize) -> Slot {
 /// The boxes of block `b` whose vertices are stored as planes in `coords` (coordinate `a` of
 /// vertex `(x, y)` at `coords[(3 * y + a) * (cols + 1) + x]`, as [`super::GridMesh`] stores
 /// them): the root, returned, and the quadrants' nodes, written to `quadrants` (its
-/// [`Block::num_boxes`] nodes). Each window's box is found once per axis from its three rows
-/// merged column by column (a row past the block repeats its last, a column its last), then
-/// gives its quadrant's child and a part of the root's.
+/// [`Block::num_boxes`] nodes). Per axis, each vertex row's extremes over each window's three
+/// columns are found once, then a window's box from its three rows' (a row or column past the
+/// block repeats its last); the box is its quadrant's child and a part of the root's.
 pub fn plane_boxes(b: &Block, coords: &[f32], quadrants: &mut [Box4]) -> Box4 {
     let (cols, rows) = (b.cols as usize, b.rows as usize);
     let [wc, wr] = b.windows();

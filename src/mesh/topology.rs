@@ -627,9 +627,9 @@ mod tests {
     /// Edges of random meshes (faces of 3–6 vertices from a small pool, so pairs repeat,
     /// faces repeat vertices, and edges are shared by one to many faces): each face-edge's edge
     /// joins its two vertices; edges are numbered in the order of their unordered pair; a pair
-    /// that no face uses twice and that is not degenerate is one edge, manifold only with two
-    /// uses in opposite directions; degenerate pairs and a pair used twice by one face are
-    /// non-manifold.
+    /// that no face uses twice and that is not degenerate is one edge, manifold only with one
+    /// use or two uses in opposite directions; degenerate pairs and a pair used twice by one
+    /// face are non-manifold.
     #[test]
     fn edges_are_numbered_by_pair_and_shared() {
         let mut rng = crate::harness::rng::SplitMix64(17);
@@ -648,14 +648,15 @@ mod tests {
                 let [a, b] = t.edge_verts[e as usize];
                 (a.min(b), a.max(b))
             };
-            let mut uses: std::collections::BTreeMap<(u32, u32), Vec<(usize, u32)>> =
+            // Per unordered pair: each use's face, edge, and direction (from the lower vertex).
+            let mut uses: std::collections::BTreeMap<(u32, u32), Vec<(usize, u32, bool)>> =
                 Default::default();
             for f in 0..t.num_faces() {
                 let vs = t.face_vertices(f);
                 for (i, &e) in t.face_edge_list(f).iter().enumerate() {
                     let (a, b) = (vs[i], vs[(i + 1) % vs.len()]);
                     assert_eq!(pair(e), (a.min(b), a.max(b)), "case {case}");
-                    uses.entry(pair(e)).or_default().push((f, e));
+                    uses.entry(pair(e)).or_default().push((f, e, a < b));
                 }
             }
             for e in 1..t.num_edges() as u32 {
@@ -672,6 +673,9 @@ mod tests {
                     );
                 } else {
                     assert_eq!(edges.len(), 1, "case {case}: ({a}, {b}) is one edge");
+                    let e = used[0].1 as usize;
+                    let manifold = used.len() == 1 || (used.len() == 2 && used[0].2 != used[1].2);
+                    assert_eq!(t.edge_nonmanifold[e], !manifold, "case {case}: ({a}, {b})");
                 }
             }
         }
