@@ -649,8 +649,8 @@ mod tests {
                 (a.min(b), a.max(b))
             };
             // Per unordered pair: each use's face, edge, and direction (from the lower vertex).
-            let mut uses: std::collections::BTreeMap<(u32, u32), Vec<(usize, u32, bool)>> =
-                Default::default();
+            type Uses = Vec<(usize, u32, bool)>;
+            let mut uses: std::collections::BTreeMap<(u32, u32), Uses> = Default::default();
             for f in 0..t.num_faces() {
                 let vs = t.face_vertices(f);
                 for (i, &e) in t.face_edge_list(f).iter().enumerate() {
