@@ -97,8 +97,9 @@ fn instances_share_a_mesh_and_transform_hits() {
 }
 
 /// A degenerate mesh (tens of thousands of coincident triangles, as a thin shape far from the
-/// origin dices into) makes a hierarchy deeper than the fixed traversal stack: the growable
-/// stack takes over and every triangle is still reachable.
+/// origin dices into) makes a triangle hierarchy deeper than the fixed traversal stack: the
+/// growable stack takes over and every triangle is still reachable; the grid core's top level
+/// stays shallow.
 #[test]
 fn deep_hierarchies_are_traversed_completely() {
     use limitray::dice::{DicedMesh, TriInfo};
@@ -125,8 +126,14 @@ fn deep_hierarchies_are_traversed_completely() {
         });
     }
     let grid = GridMesh::build(&d).unwrap();
-    // Too deep for the GPU walk's stack: refused when packed, with the reason.
-    let e = limitray::gpu::PackedScene::from_mesh(&grid).unwrap_err();
+    // The grid's top level halves coincident boxes by their order: its walk fits the GPU's
+    // stack.
+    limitray::gpu::PackedScene::from_mesh(&grid).unwrap();
+    // A top level whose walk could need more than the GPU's stack holds is refused when
+    // packed, with the reason (the bound is what the packer checks).
+    let mut deep = grid.clone();
+    deep.top.stack = 100_000;
+    let e = limitray::gpu::PackedScene::from_mesh(&deep).unwrap_err();
     assert!(e.to_string().contains("nodes deep"), "{e}");
     let bvh = MeshBvh::build(d);
     eprintln!("depth {}, grid top level {}", bvh.depth, grid.top.depth);

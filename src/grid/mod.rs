@@ -19,6 +19,7 @@
 //! det`) with the best `t` so far. The GPU kernels therefore walk the same tree in the same
 //! order as this walk, and `tests/gpu.rs` checks that they agree bit for bit, ties included.
 
+mod binned;
 pub mod block;
 pub mod collapse;
 pub mod node;

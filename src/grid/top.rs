@@ -1,7 +1,7 @@
-//! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from obvhs's
-//! binary PLOC build (its `fast_build` preset; the collapse of least total node area,
-//! [`super::collapse`]), with exact `f32` child boxes ([`Box8`]) and an ordered,
-//! distance-culled stack traversal. Eight children per node halve the levels a ray walks
+//! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from a binary
+//! tree of binned surface-area-heuristic splits ([`super::binned`]; the collapse of least
+//! total node area, [`super::collapse`]), with exact `f32` child boxes ([`Box8`]) and an
+//! ordered, distance-culled stack traversal. Eight children per node halve the levels a ray walks
 //! against a 4-wide tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
 //!
 //! Each node's eight boxes are the exact bounds of what lies below each child (recomputed from
@@ -11,9 +11,6 @@
 use super::collapse::Collapse;
 use super::node::{child_of, in_order, test8, Box8};
 use crate::bvh::triangle::PreparedRay;
-use glam::Vec3A;
-use obvhs::bvh2::builder::build_bvh2;
-use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
 use std::mem::MaybeUninit;
 
 /// A child reference: a node index, or a primitive with [`LEAF`] set; [`EMPTY`] for none.
@@ -61,14 +58,6 @@ pub struct Top {
     pub stack: usize,
 }
 
-struct PrimBox([[f32; 3]; 2]);
-
-impl Boundable for PrimBox {
-    fn aabb(&self) -> Aabb {
-        Aabb::new(Vec3A::from(self.0[0]), Vec3A::from(self.0[1]))
-    }
-}
-
 /// An axis-aligned box, `[lo, hi]`.
 pub(super) type Bounds = [[f32; 3]; 2];
 
@@ -106,17 +95,7 @@ impl Top {
                 stack: 1,
             };
         }
-        let prims: Vec<PrimBox> = boxes.iter().map(|&b| PrimBox(b)).collect();
-        // obvhs's `fast_build` preset (a narrower PLOC search, fewer reinsertions than
-        // `medium_build`): on the 316² grid's 99,856 blocks the grid stage takes 27 ms less
-        // (135 → 108 ms at 1 thread) for rays 0–3% slower, within the noise; on the car and
-        // the blob the rays are unchanged (BENCHMARKS.md, thirteenth step).
-        let mut params = BvhBuildParams::fast_build();
-        params.pre_split = false;
-        params.max_prims_per_leaf = 1;
-        let bvh2 = crate::bvh::mesh::build_deep(|| {
-            build_bvh2(&prims, params, &mut std::time::Duration::default())
-        });
+        let bvh2 = super::binned::build(boxes);
         let mut top = Top {
             nodes: Vec::with_capacity(bvh2.nodes.len() / 3 + 1),
             root: 0,
