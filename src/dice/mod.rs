@@ -648,8 +648,8 @@ fn dice_with(
     let sizes: Vec<DomainSize> = domains
         .par_iter()
         .with_min_len(64)
-        .map_init(HashMap::default, |cache, &(f, k)| {
-            ctx.domain_size(f as usize, k as usize, cache)
+        .map_init(Default::default, |scratch, &(f, k)| {
+            ctx.domain_size(f as usize, k as usize, scratch)
         })
         .collect();
     let total_points = shared.jobs.len() + sizes.iter().map(|z| z.points).sum::<usize>();
@@ -900,12 +900,13 @@ impl DomainSlices<'_> {
     }
 }
 
-/// What a worker keeps from domain to domain: the stitch patterns by side rates, and the
-/// buffers of a lattice's points and normals.
+/// What a worker keeps from domain to domain: the stitch patterns by side rates, the
+/// buffers of a lattice's points and normals, and the domain's sides.
 #[derive(Default)]
 struct Scratch {
     patterns: HashMap<[u32; 4], Pattern>,
     lattice: LatticeScratch,
+    sides: Sides,
 }
 
 /// A run of evaluated points (a domain's lattice, or shared points) and their unit normals.
@@ -957,9 +958,22 @@ struct SidePoint {
     seam: bool,
 }
 
+/// A domain's four sides ([`DomainCtx::sides`]) and a fifth list of scratch space, kept by a
+/// worker from domain to domain (lists allocated per domain took a 316² grid's dicing 10 ms).
+#[derive(Default)]
+struct Sides([Vec<SidePoint>; 5]);
+
+impl Sides {
+    /// The four sides.
+    fn get(&self) -> &[Vec<SidePoint>] {
+        &self.0[..4]
+    }
+}
+
 impl DomainCtx<'_> {
-    /// The `r + 1` points of face edge `m` of face `f`, from its vertex `m` to vertex `m + 1`.
-    fn face_edge_points(&self, f: usize, m: usize) -> Vec<SidePoint> {
+    /// The `r + 1` points of face edge `m` of face `f`, from its vertex `m` to vertex `m + 1`,
+    /// into `pts` (cleared first).
+    fn face_edge_points(&self, f: usize, m: usize, pts: &mut Vec<SidePoint>) {
         let topo = &self.level.topo;
         let n = topo.face_size(f);
         let e = topo.face_edge(f, m) as usize;
@@ -968,7 +982,7 @@ impl DomainCtx<'_> {
         let r = self.rates.edge[e];
         let forward = topo.edge_verts[e][0] as usize == va;
         let first = self.shared.edge_first[e];
-        let mut pts = Vec::with_capacity(r as usize + 1);
+        pts.clear();
         pts.push(SidePoint {
             index: self.shared.vertex[va],
             seam: self.sharp_vertex[va],
@@ -984,17 +998,24 @@ impl DomainCtx<'_> {
             index: self.shared.vertex[vb],
             seam: self.sharp_vertex[vb],
         });
-        pts
     }
 
-    /// Spoke `k` of n-gon `f`: from the midpoint of edge `k` to the centre.
-    fn spoke_points(&self, f: usize, k: usize) -> Vec<SidePoint> {
+    /// Spoke `k` of n-gon `f`: from the midpoint of edge `k` to the centre, into `pts`
+    /// (cleared first; `edge` is scratch space).
+    fn spoke_points(
+        &self,
+        f: usize,
+        k: usize,
+        pts: &mut Vec<SidePoint>,
+        edge: &mut Vec<SidePoint>,
+    ) {
         let topo = &self.level.topo;
-        let edge = self.face_edge_points(f, k);
+        self.face_edge_points(f, k, edge);
         let slot = topo.face_offsets[f] as usize + k;
         let s = self.rates.spoke[slot];
         let first = self.shared.spoke_first[slot];
-        let mut pts = vec![edge[edge.len() / 2]];
+        pts.clear();
+        pts.push(edge[edge.len() / 2]);
         pts.extend((0..s - 1).map(|i| SidePoint {
             index: first + i,
             seam: false,
@@ -1003,7 +1024,6 @@ impl DomainCtx<'_> {
             index: self.shared.centre[f],
             seam: false,
         });
-        pts
     }
 
     /// The interior points of domain `(f, k)` (the lattice of `pat`, `put(i, point)` for the
@@ -1040,24 +1060,25 @@ impl DomainCtx<'_> {
         Ok(true)
     }
 
-    /// The points of the four sides of domain `(f, k)`, each from its start to its end.
-    fn sides(&self, f: usize, k: usize) -> [Vec<SidePoint>; 4] {
+    /// The points of the four sides of domain `(f, k)`, each from its start to its end, into
+    /// `sides` (reused from domain to domain).
+    fn sides(&self, f: usize, k: usize, sides: &mut Sides) {
         let topo = &self.level.topo;
         let n = topo.face_size(f);
+        let [s0, s1, s2, s3, edge] = &mut sides.0;
         if n == 4 {
-            std::array::from_fn(|m| self.face_edge_points(f, m))
+            for (m, side) in [s0, s1, s2, s3].into_iter().enumerate() {
+                self.face_edge_points(f, m, side);
+            }
         } else {
-            let ek = self.face_edge_points(f, k);
             let prev = (k + n - 1) % n;
-            let ep = self.face_edge_points(f, prev);
-            let mut s2 = self.spoke_points(f, prev);
+            self.face_edge_points(f, k, s0);
+            s0.truncate(s0.len() / 2 + 1);
+            self.spoke_points(f, k, s1, edge);
+            self.spoke_points(f, prev, s2, edge);
             s2.reverse();
-            [
-                ek[..=ek.len() / 2].to_vec(),
-                self.spoke_points(f, k),
-                s2,
-                ep[ep.len() / 2..].to_vec(),
-            ]
+            self.face_edge_points(f, prev, s3);
+            s3.drain(..s3.len() / 2);
         }
     }
 
@@ -1073,9 +1094,10 @@ impl DomainCtx<'_> {
         &self,
         f: usize,
         k: usize,
-        cache: &mut HashMap<[u32; 4], Pattern>,
+        (cache, sides): &mut (HashMap<[u32; 4], Pattern>, Sides),
     ) -> DomainSize {
-        let sides = self.sides(f, k);
+        self.sides(f, k, sides);
+        let sides = sides.get();
         let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
         let pat = cache.entry(rates).or_insert_with(|| pattern(rates));
         let copies = sides
@@ -1100,9 +1122,14 @@ impl DomainCtx<'_> {
         scratch: &mut Scratch,
         mut out: DomainSlices,
     ) -> Result<()> {
-        let sides = self.sides(f, k);
+        let Scratch {
+            patterns,
+            lattice,
+            sides,
+        } = scratch;
+        self.sides(f, k, sides);
+        let sides = sides.get();
         let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
-        let Scratch { patterns, lattice } = scratch;
         let pat = patterns.entry(rates).or_insert_with(|| pattern(rates));
         let ring = pat.ring_len();
         // Map pattern indices to vertex indices.
