@@ -901,12 +901,14 @@ impl DomainSlices<'_> {
 }
 
 /// What a worker keeps from domain to domain: the stitch patterns by side rates, the
-/// buffers of a lattice's points and normals, and the domain's sides.
+/// buffers of a lattice's points and normals, the domain's sides and its index map.
 #[derive(Default)]
 struct Scratch {
     patterns: HashMap<[u32; 4], Pattern>,
     lattice: LatticeScratch,
     sides: Sides,
+    /// Pattern indices to vertex indices.
+    map: Vec<u32>,
 }
 
 /// A run of evaluated points (a domain's lattice, or shared points) and their unit normals.
@@ -1126,6 +1128,7 @@ impl DomainCtx<'_> {
             patterns,
             lattice,
             sides,
+            map,
         } = scratch;
         self.sides(f, k, sides);
         let sides = sides.get();
@@ -1133,7 +1136,8 @@ impl DomainCtx<'_> {
         let pat = patterns.entry(rates).or_insert_with(|| pattern(rates));
         let ring = pat.ring_len();
         // Map pattern indices to vertex indices.
-        let mut map: Vec<u32> = Vec::with_capacity(ring + pat.interior.len());
+        map.clear();
+        map.reserve(ring + pat.interior.len());
         let mut own = 0;
         for (s, side) in sides.iter().enumerate() {
             for (j, &sp) in side[..side.len() - 1].iter().enumerate() {
