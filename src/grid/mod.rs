@@ -7,7 +7,8 @@
 //! window at once ([`window`]). The triangles outside the grids (zippers between different
 //! rates, tiny domains) are *loose* triangles with their own records, grouped into strips of
 //! at most [`STRIP`] consecutive triangles of one domain. An 8-wide BVH over blocks and
-//! strips is the top level ([`top`], collapsed by [`collapse`]), its boxes exact.
+//! strips is the top level ([`top`]: a binary tree of binned SAH splits, `binned.rs`,
+//! collapsed by [`collapse`]), its boxes exact.
 //!
 //! The vertices are the diced mesh's `f32` points, copied bit for bit: a vertex on a shared
 //! edge has the same bits in every block and loose triangle that holds it, and every triangle

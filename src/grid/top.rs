@@ -1,5 +1,5 @@
 //! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from a binary
-//! tree of binned surface-area-heuristic splits ([`super::binned`]; the collapse of least
+//! tree of binned surface-area-heuristic splits (`binned.rs`; the collapse of least
 //! total node area, [`super::collapse`]), with exact `f32` child boxes ([`Box8`]) and an
 //! ordered, distance-culled stack traversal. Eight children per node halve the levels a ray walks
 //! against a 4-wide tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
