@@ -26,6 +26,12 @@ const BINS: usize = 32;
 /// Clusters of at most this many items are split exactly ([`split_small`]).
 const SMALL: usize = 32;
 
+/// Binary levels split by the surface area heuristic; deeper clusters are halved at their
+/// median ([`split_median`]). Splits that cut off a few items at a time (centres spaced
+/// geometrically, say) would otherwise make the build quadratic; with this bound a build visits
+/// each item at most `DEEP + log₂ n` times.
+const DEEP: usize = 48;
+
 /// Clusters of at least this many items may build their halves in parallel.
 const PARALLEL: usize = 4096;
 
@@ -248,6 +254,24 @@ fn split_small(items: &mut [Item], c: &Cluster) -> (Cluster, Cluster) {
     )
 }
 
+/// Halves a cluster (`items`) at the median of its centres along their widest axis.
+fn split_median(items: &mut [Item], c: &Cluster) -> (Cluster, Cluster) {
+    let e = c.centre_hi.sub(c.centre_lo).0;
+    let a = if e[0] >= e[1] && e[0] >= e[2] {
+        0
+    } else if e[1] >= e[2] {
+        1
+    } else {
+        2
+    };
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |x, y| x.centre().0[a].total_cmp(&y.centre().0[a]));
+    (
+        Cluster::of(&items[..mid], c.begin),
+        Cluster::of(&items[mid..], c.begin + mid),
+    )
+}
+
 /// Splits the cluster `c`, whose items are `items` (`items[0]` is item `c.begin`), in two:
 /// the items are reordered in place, left part first. `bins` is scratch space.
 fn split(items: &mut [Item], c: &Cluster, bins: &mut [[[Bin; BINS]; 3]; 2]) -> (Cluster, Cluster) {
@@ -384,16 +408,27 @@ fn node2(c: &Cluster, leaf: bool, first: usize) -> Bvh2Node {
 /// `below` holds its `2 · len − 2` descendants, `below[0]` being node `at`. The two children
 /// of a node come first in its range, then the first child's descendants, then the second's:
 /// every subtree's range is known from its count alone, so the halves of a large cluster are
-/// built side by side into disjoint ranges.
-fn build_below(items: &mut [Item], whole: Cluster, below: &mut [Bvh2Node], at: usize) {
+/// built side by side into disjoint ranges. `depth` is the node's binary level.
+fn build_below(
+    items: &mut [Item],
+    whole: Cluster,
+    below: &mut [Bvh2Node],
+    at: usize,
+    depth: usize,
+) {
     debug_assert_eq!(below.len(), 2 * whole.len() - 2);
     let base = whole.begin;
     let mut bins = [[[EMPTY_BIN; BINS]; 3]; 2];
-    // Clusters to split (at least two items), with the start of their descendants' range.
-    let mut work = vec![(whole, 0)];
-    while let Some((c, start)) = work.pop() {
+    // Clusters to split (at least two items), with the start of their descendants' range and
+    // their level.
+    let mut work = vec![(whole, 0, depth)];
+    while let Some((c, start, depth)) = work.pop() {
         let mine = &mut items[c.begin - base..c.end - base];
-        let (l, r) = split(mine, &c, &mut bins);
+        let (l, r) = if depth < DEEP {
+            split(mine, &c, &mut bins)
+        } else {
+            split_median(mine, &c)
+        };
         // The first child's descendants start after the two children, the second's after
         // the first's.
         let (l_start, r_start) = (start + 2, start + 2 + 2 * l.len() - 2);
@@ -410,17 +445,17 @@ fn build_below(items: &mut [Item], whole: Cluster, below: &mut [Bvh2Node], at: u
             let (li, ri) = mine.split_at_mut(l.len());
             let (lb, rb) = below[l_start..start + 2 * c.len() - 2].split_at_mut(2 * l.len() - 2);
             rayon::join(
-                || build_below(li, l, lb, at + l_start),
-                || build_below(ri, r, rb, at + r_start),
+                || build_below(li, l, lb, at + l_start, depth + 1),
+                || build_below(ri, r, rb, at + r_start, depth + 1),
             );
             continue;
         }
         // The second child is pushed first: the first is split next.
         if r.len() >= 2 {
-            work.push((r, r_start));
+            work.push((r, r_start, depth + 1));
         }
         if l.len() >= 2 {
-            work.push((l, l_start));
+            work.push((l, l_start, depth + 1));
         }
     }
 }
@@ -440,7 +475,7 @@ pub(super) fn build(boxes: &[Bounds]) -> Bvh2 {
     let whole = Cluster::of(&items, 0);
     // A binary tree of `n` leaves has `2n − 1` nodes: the root, then its descendants.
     let mut nodes = vec![node2(&whole, false, 1); 2 * boxes.len() - 1];
-    build_below(&mut items, whole, &mut nodes[1..], 1);
+    build_below(&mut items, whole, &mut nodes[1..], 1, 0);
     Bvh2 {
         nodes,
         primitive_indices: items.iter().map(Item::id).collect(),
@@ -539,6 +574,39 @@ mod tests {
                 (y.aabb, y.prim_count, y.first_index)
             );
         }
+    }
+
+    /// Binary levels below node `n` (a leaf: 0).
+    fn levels(t: &Bvh2, n: usize) -> usize {
+        let node = &t.nodes[n];
+        if node.prim_count != 0 {
+            return 0;
+        }
+        let f = node.first_index as usize;
+        1 + levels(t, f).max(levels(t, f + 1))
+    }
+
+    /// Boxes spaced and sized geometrically (each twice the last, over 71 orders of
+    /// magnitude): the best planes cut off the largest boxes a few at a time (65 levels for
+    /// 236 boxes). Below [`DEEP`] levels the clusters are halved instead, so the tree stays
+    /// within `DEEP + log₂ n` levels (and its build linear in that depth).
+    #[test]
+    fn geometric_spacing_stays_within_the_depth_bound() {
+        let n = 236usize;
+        let boxes: Vec<Bounds> = (0..n)
+            .map(|i| {
+                let x = 2f32.powi(i as i32 - 120);
+                [[x, 0.0, 0.0], [2.0 * x, 1.0, 1.0]]
+            })
+            .collect();
+        let t = build(&boxes);
+        let depth = levels(&t, 0);
+        let bound = DEEP + (n as f64).log2().ceil() as usize;
+        assert!(depth <= bound, "{depth} levels, bound {bound}");
+        assert!(
+            depth > DEEP,
+            "{depth} levels: the median splits were not reached"
+        );
     }
 
     /// Two groups of boxes far apart along one axis are the root's two children, whether
