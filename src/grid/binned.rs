@@ -160,6 +160,26 @@ impl Cluster {
         c
     }
 
+    /// The clusters of `items[..mid]` and `items[mid..]` (`items` start at `begin`).
+    fn halves(items: &[Item], begin: usize, mid: usize) -> (Cluster, Cluster) {
+        (
+            Cluster::of(&items[..mid], begin),
+            Cluster::of(&items[mid..], begin + mid),
+        )
+    }
+
+    /// The axis along which the centres spread most (the first of equals).
+    fn widest_axis(&self) -> usize {
+        let e = self.centre_hi.sub(self.centre_lo).0;
+        if e[0] >= e[1] && e[0] >= e[2] {
+            0
+        } else if e[1] >= e[2] {
+            1
+        } else {
+            2
+        }
+    }
+
     /// Sets the centres' bounds from `items`.
     fn centres(&mut self, items: &[Item]) {
         let (mut lo, mut hi) = (F4::INF, F4::NEG_INF);
@@ -215,14 +235,7 @@ impl Binning {
 /// widest axis of its centres: the items sorted along it (stably), every position tried.
 fn split_small(items: &mut [Item], c: &Cluster) -> (Cluster, Cluster) {
     let n = items.len();
-    let e = c.centre_hi.sub(c.centre_lo).0;
-    let a = if e[0] >= e[1] && e[0] >= e[2] {
-        0
-    } else if e[1] >= e[2] {
-        1
-    } else {
-        2
-    };
+    let a = c.widest_axis();
     for i in 1..n {
         let mut j = i;
         while j > 0 && items[j - 1].centre().0[a] > items[j].centre().0[a] {
@@ -248,28 +261,15 @@ fn split_small(items: &mut [Item], c: &Cluster) -> (Cluster, Cluster) {
         }
     }
     let mid = best.1;
-    (
-        Cluster::of(&items[..mid], c.begin),
-        Cluster::of(&items[mid..], c.begin + mid),
-    )
+    Cluster::halves(items, c.begin, mid)
 }
 
 /// Halves a cluster (`items`) at the median of its centres along their widest axis.
 fn split_median(items: &mut [Item], c: &Cluster) -> (Cluster, Cluster) {
-    let e = c.centre_hi.sub(c.centre_lo).0;
-    let a = if e[0] >= e[1] && e[0] >= e[2] {
-        0
-    } else if e[1] >= e[2] {
-        1
-    } else {
-        2
-    };
+    let a = c.widest_axis();
     let mid = items.len() / 2;
     items.select_nth_unstable_by(mid, |x, y| x.centre().0[a].total_cmp(&y.centre().0[a]));
-    (
-        Cluster::of(&items[..mid], c.begin),
-        Cluster::of(&items[mid..], c.begin + mid),
-    )
+    Cluster::halves(items, c.begin, mid)
 }
 
 /// Splits the cluster `c`, whose items are `items` (`items[0]` is item `c.begin`), in two:
@@ -354,11 +354,7 @@ fn split(items: &mut [Item], c: &Cluster, bins: &mut [[[Bin; BINS]; 3]; 2]) -> (
     }
     let Some((_, a, k)) = best else {
         // Every centre in one bin on every axis (equal centres): halve by order.
-        let mid = n / 2;
-        return (
-            Cluster::of(&items[..mid], c.begin),
-            Cluster::of(&items[mid..], c.begin + mid),
-        );
+        return Cluster::halves(items, c.begin, n / 2);
     };
     // Items whose bin is at most `k` go left.
     let goes_left = |it: &Item| binning.of(it)[a] <= k;
