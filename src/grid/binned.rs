@@ -44,9 +44,21 @@ impl F4 {
     const INF: F4 = F4([f32::INFINITY; 4]);
     const NEG_INF: F4 = F4([f32::NEG_INFINITY; 4]);
 
-    /// Lane by lane `a < b ? a : b` (`minps`; never given a NaN here).
+    /// Lane by lane `a < b ? a : b` (`minps` exactly; never given a NaN here).
     #[inline(always)]
     fn min(self, b: F4) -> F4 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE is part of x86_64; `F4` is 16 bytes, aligned to 16.
+        unsafe {
+            use std::arch::x86_64::{_mm_load_ps, _mm_min_ps, _mm_store_ps};
+            let mut out = F4([0.0; 4]);
+            _mm_store_ps(
+                out.0.as_mut_ptr(),
+                _mm_min_ps(_mm_load_ps(self.0.as_ptr()), _mm_load_ps(b.0.as_ptr())),
+            );
+            out
+        }
+        #[cfg(not(target_arch = "x86_64"))]
         F4(std::array::from_fn(|i| {
             if self.0[i] < b.0[i] {
                 self.0[i]
@@ -56,9 +68,21 @@ impl F4 {
         }))
     }
 
-    /// Lane by lane `a > b ? a : b` (`maxps`).
+    /// Lane by lane `a > b ? a : b` (`maxps` exactly).
     #[inline(always)]
     fn max(self, b: F4) -> F4 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `min`.
+        unsafe {
+            use std::arch::x86_64::{_mm_load_ps, _mm_max_ps, _mm_store_ps};
+            let mut out = F4([0.0; 4]);
+            _mm_store_ps(
+                out.0.as_mut_ptr(),
+                _mm_max_ps(_mm_load_ps(self.0.as_ptr()), _mm_load_ps(b.0.as_ptr())),
+            );
+            out
+        }
+        #[cfg(not(target_arch = "x86_64"))]
         F4(std::array::from_fn(|i| {
             if self.0[i] > b.0[i] {
                 self.0[i]
@@ -218,8 +242,19 @@ impl Binning {
     /// The three axes' bins of `it`.
     #[inline(always)]
     fn of(&self, it: &Item) -> [usize; 3] {
-        let x = it
-            .centre()
+        self.bins(it.centre())
+    }
+
+    /// Axis `a`'s bin of the (doubled) centre `m`: lane `a` of [`Self::bins`].
+    #[inline(always)]
+    fn bin_of(&self, m: F4, a: usize) -> usize {
+        self.bins(m)[a]
+    }
+
+    /// The three axes' bins of the (doubled) centre `m`.
+    #[inline(always)]
+    fn bins(&self, m: F4) -> [usize; 3] {
+        let x = m
             .sub(self.lo)
             .mul(self.scale)
             .max(F4([0.0; 4]))
@@ -236,12 +271,20 @@ impl Binning {
 fn split_small(items: &mut [Item], c: &Cluster) -> (Cluster, Cluster) {
     let n = items.len();
     let a = c.widest_axis();
-    for i in 1..n {
+    // A stable insertion sort of (centre, position) keys, then the items in their order.
+    let mut keys = [(0f32, 0u8); SMALL];
+    for (i, it) in items.iter().enumerate() {
+        let key = (it.centre().0[a], i as u8);
         let mut j = i;
-        while j > 0 && items[j - 1].centre().0[a] > items[j].centre().0[a] {
-            items.swap(j - 1, j);
+        while j > 0 && keys[j - 1].0 > key.0 {
+            keys[j] = keys[j - 1];
             j -= 1;
         }
+        keys[j] = key;
+    }
+    let copy: [Item; SMALL] = std::array::from_fn(|i| items[i.min(n - 1)]);
+    for (it, &(_, from)) in items.iter_mut().zip(&keys[..n]) {
+        *it = copy[from as usize];
     }
     let mut right_area = [0f32; SMALL];
     let (mut lo, mut hi) = (F4::INF, F4::NEG_INF);
@@ -356,14 +399,23 @@ fn split(items: &mut [Item], c: &Cluster, bins: &mut [[[Bin; BINS]; 3]; 2]) -> (
         // Every centre in one bin on every axis (equal centres): halve by order.
         return Cluster::halves(items, c.begin, n / 2);
     };
-    // Items whose bin is at most `k` go left.
-    let goes_left = |it: &Item| binning.of(it)[a] <= k;
+    // Items whose bin is at most `k` go left; each side's centre bounds are taken as its
+    // items are classified (every item is classified once, on the side it ends on).
+    let mut centres = [(F4::INF, F4::NEG_INF); 2];
+    let mut classify = |it: &Item| {
+        let m = it.centre();
+        let left = binning.bin_of(m, a) <= k;
+        let s = &mut centres[usize::from(!left)];
+        s.0 = s.0.min(m);
+        s.1 = s.1.max(m);
+        left
+    };
     let (mut l, mut r) = (0, n);
     loop {
-        while l < r && goes_left(&items[l]) {
+        while l < r && classify(&items[l]) {
             l += 1;
         }
-        while l < r && !goes_left(&items[r - 1]) {
+        while l < r && !classify(&items[r - 1]) {
             r -= 1;
         }
         if l >= r {
@@ -374,23 +426,25 @@ fn split(items: &mut [Item], c: &Cluster, bins: &mut [[[Bin; BINS]; 3]; 2]) -> (
         r -= 1;
     }
     // Each side's box: its bins' union (the partition used the bins' own index).
-    let side = |bins: &[Bin], begin: usize, end: usize| {
+    let side = |bins: &[Bin], begin: usize, end: usize, (centre_lo, centre_hi): (F4, F4)| {
         let mut s = Cluster {
             begin: c.begin + begin,
             end: c.begin + end,
             lo: F4::INF,
             hi: F4::NEG_INF,
-            centre_lo: F4::INF,
-            centre_hi: F4::NEG_INF,
+            centre_lo,
+            centre_hi,
         };
         for b in bins {
             s.lo = s.lo.min(b.lo);
             s.hi = s.hi.max(b.hi);
         }
-        s.centres(&items[begin..end]);
         s
     };
-    (side(&even[a][..=k], 0, l), side(&even[a][k + 1..nb], l, n))
+    (
+        side(&even[a][..=k], 0, l, centres[0]),
+        side(&even[a][k + 1..nb], l, n, centres[1]),
+    )
 }
 
 /// A node of the binary tree: a leaf holds item `first` (its position in the final item
