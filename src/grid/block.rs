@@ -11,7 +11,7 @@ pub const BLOCK: usize = 8;
 /// (`x`, `y`, `z`) of [`super::GridMesh`]'s coordinates; everything about a hit on it — the
 /// triangle's id in the diced mesh, the face, the `(u, v)` of its corners — follows from the
 /// header and the grid index.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Block {
     /// The hierarchy's first node: the windows of a block of at most 4×4 quads, else the

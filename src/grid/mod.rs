@@ -144,7 +144,7 @@ struct Best {
 
 /// Where a planned block lies: its region (index in [`DicedMesh::grids`]) and where it
 /// starts in the region's grid (its header is apart, in [`GridMesh::blocks`]).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Zeroable)]
 struct Planned {
     region: u32,
     origin: [u32; 2],
@@ -174,13 +174,15 @@ fn blocks_of(g: &GridRegion) -> usize {
     qc.div_ceil(BLOCK) * qr.div_ceil(BLOCK)
 }
 
-/// Appends the blocks of region `region` (`g`) to `out`: their headers, without offsets
-/// (nothing is read from the diced mesh).
-fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>, headers: &mut Vec<Block>) {
+/// Writes the blocks of region `region` (`g`) to the fronts of `out` and `headers`: where
+/// each lies, and its header without offsets (nothing is read from the diced mesh). Returns
+/// how many ([`blocks_of`]).
+fn plan_region(region: usize, g: &GridRegion, out: &mut [Planned], headers: &mut [Block]) -> usize {
     let [qc, qr] = g.part.quads.map(|x| x as usize);
+    let mut made = 0;
     for (y0, rows) in runs(qr) {
         for (x0, cols) in runs(qc) {
-            let header = Block {
+            headers[made] = Block {
                 tri0: g.first_triangle + 2 * (y0 * qc + x0) as u32,
                 tri_stride: 2 * qc as u32,
                 face: g.face,
@@ -193,11 +195,57 @@ fn plan_region(region: usize, g: &GridRegion, out: &mut Vec<Planned>, headers: &
                 level: g.level.map_or(0, |l| LEVEL_UNIFORM | l as u32),
                 ..Block::default()
             };
-            out.push(Planned {
+            out[made] = Planned {
                 region: region as u32,
                 origin: [x0 as u32, y0 as u32],
-            });
-            headers.push(header);
+            };
+            made += 1;
+        }
+    }
+    made
+}
+
+/// The blocks of region `g`: [`blocks_of`], none when it has no quads.
+fn planned_blocks(g: &GridRegion) -> usize {
+    if g.part.quads[0] > 0 && g.part.quads[1] > 0 {
+        blocks_of(g)
+    } else {
+        0
+    }
+}
+
+/// Space in [`GridMesh`]'s arrays: coordinates, box nodes and levels.
+#[derive(Clone, Copy, Default)]
+struct Extent {
+    coords: usize,
+    boxes: usize,
+    levels: usize,
+}
+
+impl Extent {
+    /// What `h` takes.
+    fn of(h: &Block) -> Extent {
+        Extent {
+            coords: 3 * h.num_vertices(),
+            boxes: h.num_boxes(),
+            levels: h.num_levels(),
+        }
+    }
+
+    fn add(self, b: Extent) -> Extent {
+        Extent {
+            coords: self.coords + b.coords,
+            boxes: self.boxes + b.boxes,
+            levels: self.levels + b.levels,
+        }
+    }
+
+    /// Sets `h`'s offsets to `self` plus those it has.
+    fn offset(self, h: &mut Block) {
+        h.vert += self.coords as u32;
+        h.boxes += self.boxes as u32;
+        if h.level & LEVEL_UNIFORM == 0 {
+            h.level += self.levels as u32;
         }
     }
 }
@@ -293,31 +341,56 @@ impl GridMesh {
         tri_levels: Option<&[u8]>,
         normal_codes: Option<&[u32]>,
     ) -> Result<GridMesh> {
-        // Plan the blocks (headers, then their offsets in region order), store each in place,
-        // in parallel, and take its bounds from its root box; the top level is built over
-        // those bounds.
-        let nplanned = d.grids.iter().map(blocks_of).sum::<usize>();
-        let mut plans: Vec<Planned> = Vec::with_capacity(nplanned);
-        let mut headers: Vec<Block> = Vec::with_capacity(nplanned);
+        // Plan the blocks in runs of regions of about CHUNK blocks, in parallel (headers with
+        // offsets within their run, and each run's extent), then store each in place, in
+        // parallel, its offsets made global first, and take its bounds from its root box; the
+        // top level is built over those bounds.
+        const CHUNK: usize = 128;
+        let mut chunks: Vec<(std::ops::Range<usize>, usize)> = Vec::new();
+        let (mut start, mut count) = (0, 0);
         for (i, g) in d.grids.iter().enumerate() {
-            if g.part.quads[0] > 0 && g.part.quads[1] > 0 {
-                plan_region(i, g, &mut plans, &mut headers);
+            count += planned_blocks(g);
+            if count >= CHUNK || i + 1 == d.grids.len() {
+                chunks.push((start..i + 1, count));
+                (start, count) = (i + 1, 0);
             }
         }
-        let (mut ncoords, mut nboxes, mut nlevels) = (0usize, 0usize, 0usize);
-        for h in &mut headers {
-            h.vert = ncoords as u32;
-            h.boxes = nboxes as u32;
-            if h.level & LEVEL_UNIFORM == 0 {
-                h.level = nlevels as u32;
+        let nplanned = chunks.iter().map(|c| c.1).sum::<usize>();
+        if nplanned >= 1 << 24 {
+            return Err(too_many(nplanned, "grid blocks", "2^24"));
+        }
+        // Zeroed: the pages are first touched by the run that writes them, in parallel.
+        let mut plans: Vec<Planned> = bytemuck::zeroed_vec(nplanned);
+        let mut headers: Vec<Block> = bytemuck::zeroed_vec(nplanned);
+        let mut runs = Vec::with_capacity(chunks.len());
+        {
+            let (mut p, mut h) = (&mut plans[..], &mut headers[..]);
+            for (regions, n) in &chunks {
+                runs.push((
+                    regions.clone(),
+                    split_off(&mut p, *n),
+                    split_off(&mut h, *n),
+                ));
             }
-            ncoords += 3 * h.num_vertices();
-            nboxes += h.num_boxes();
-            nlevels += h.num_levels();
         }
-        if plans.len() >= 1 << 24 {
-            return Err(too_many(plans.len(), "grid blocks", "2^24"));
-        }
+        let extents: Vec<Extent> = runs
+            .into_par_iter()
+            .map(|(regions, plans, headers)| {
+                let mut at = 0;
+                for i in regions {
+                    let g = &d.grids[i];
+                    if planned_blocks(g) > 0 {
+                        at += plan_region(i, g, &mut plans[at..], &mut headers[at..]);
+                    }
+                }
+                headers.iter_mut().fold(Extent::default(), |e, h| {
+                    e.offset(h);
+                    e.add(Extent::of(h))
+                })
+            })
+            .collect();
+        let total = extents.iter().fold(Extent::default(), |a, &e| a.add(e));
+        let (ncoords, nboxes, nlevels) = (total.coords, total.boxes, total.levels);
         // Each vertex's octahedral normal, encoded once (a block border's vertices are held by
         // two or four blocks, a loose triangle's corners by several triangles).
         let encoded;
@@ -347,23 +420,36 @@ impl GridMesh {
         m.boxes = bytemuck::zeroed_vec(nboxes);
         m.levels = vec![0; nlevels];
         {
-            let mut jobs = Vec::with_capacity(plans.len());
+            let mut jobs = Vec::with_capacity(chunks.len());
             let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
             let (mut boxes, mut levels) = (&mut m.boxes[..], &mut m.levels[..]);
-            for (&p, h) in plans.iter().zip(&mut headers) {
-                let nv = h.num_vertices();
+            let (mut p, mut h) = (&plans[..], &mut headers[..]);
+            let mut base = Extent::default();
+            for (&(_, n), &e) in chunks.iter().zip(&extents) {
                 let out = BlockSlices {
-                    coords: split_off(&mut coords, 3 * nv),
-                    normals: split_off(&mut normals, nv),
-                    boxes: split_off(&mut boxes, h.num_boxes()),
-                    levels: split_off(&mut levels, h.num_levels()),
+                    coords: split_off(&mut coords, e.coords),
+                    normals: split_off(&mut normals, e.coords / 3),
+                    boxes: split_off(&mut boxes, e.boxes),
+                    levels: split_off(&mut levels, e.levels),
                 };
-                jobs.push((p, h, out));
+                let (mine, rest) = p.split_at(n);
+                p = rest;
+                jobs.push((base, mine, split_off(&mut h, n), out));
+                base = base.add(e);
             }
             jobs.into_par_iter()
-                .with_min_len(16)
-                .for_each(|(p, h, out)| {
-                    h.root = fill_block(d, tri_levels, codes, p, h, out);
+                .for_each(|(base, plans, headers, mut out)| {
+                    for (&p, h) in plans.iter().zip(headers) {
+                        base.offset(h);
+                        let e = Extent::of(h);
+                        let mine = BlockSlices {
+                            coords: split_off(&mut out.coords, e.coords),
+                            normals: split_off(&mut out.normals, e.coords / 3),
+                            boxes: split_off(&mut out.boxes, e.boxes),
+                            levels: split_off(&mut out.levels, e.levels),
+                        };
+                        h.root = fill_block(d, tri_levels, codes, p, h, mine);
+                    }
                 });
         }
         // Each block's bounds: the union of its root's children (absent ones are empty).
