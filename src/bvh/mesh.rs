@@ -270,14 +270,14 @@ impl Corners {
         let v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
         let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let ng = normalize([
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ]);
-        let ns = normalize(std::array::from_fn(|i| {
-            b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]
-        }));
+        let (ng, ns) = normalize2(
+            [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ],
+            std::array::from_fn(|i| b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]),
+        );
         Hit {
             t,
             triangle,
@@ -323,6 +323,39 @@ pub(crate) fn build_deep<T: Send>(f: impl FnOnce() -> T + Send) -> T {
         Ok(pool) => pool.install(f),
         Err(_) => f(),
     }
+}
+
+/// [`normalize`] of `a` and `b`, bit for bit: where both squared lengths are normal `f32`
+/// (always, but for degenerate triangles), one vector square root and three divisions for
+/// the two (SSE2; IEEE per lane), else each through [`normalize`].
+#[inline]
+pub fn normalize2(a: [f32; 3], b: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of the x86_64 baseline.
+    unsafe {
+        use std::arch::x86_64::*;
+        let axis = |i: usize| _mm_set_ps(0.0, 0.0, b[i], a[i]);
+        let (x, y, z) = (axis(0), axis(1), axis(2));
+        let l2 = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)),
+            _mm_mul_ps(z, z),
+        );
+        let mut l = [0f32; 4];
+        _mm_storeu_ps(l.as_mut_ptr(), l2);
+        if l[..2]
+            .iter()
+            .all(|l2| l2.is_finite() && *l2 >= f32::MIN_POSITIVE)
+        {
+            let l = _mm_sqrt_ps(l2);
+            let mut out = [[0f32; 4]; 3];
+            _mm_storeu_ps(out[0].as_mut_ptr(), _mm_div_ps(x, l));
+            _mm_storeu_ps(out[1].as_mut_ptr(), _mm_div_ps(y, l));
+            _mm_storeu_ps(out[2].as_mut_ptr(), _mm_div_ps(z, l));
+            let lane = |k: usize| [out[0][k], out[1][k], out[2][k]];
+            return (lane(0), lane(1));
+        }
+    }
+    (normalize(a), normalize(b))
 }
 
 /// Normalises `v` (zero stays zero). Where the squared length is not a normal `f32`
@@ -691,6 +724,29 @@ fn widen(node: &mut CwBvhNode, c: usize, want: Bounds) -> Option<usize> {
 mod tests {
     use super::*;
     use crate::bvh::Ray;
+
+    /// [`normalize2`] gives [`normalize`]'s bits for both vectors: random vectors of
+    /// magnitudes 2^-80 to 2^80 (squared lengths that underflow and overflow, so both paths
+    /// are taken, alone and together), zero vectors and NaNs.
+    #[test]
+    fn normalize2_is_normalize_bit_for_bit() {
+        let mut rng = crate::harness::rng::SplitMix64(12);
+        let vector = |rng: &mut crate::harness::rng::SplitMix64| -> [f32; 3] {
+            let scale = 2f32.powi((rng.next_f64() * 160.0) as i32 - 80);
+            match rng.next_u64() % 50 {
+                0 => [0.0; 3],
+                1 => [f32::NAN, 1.0, 0.0],
+                _ => std::array::from_fn(|_| (rng.next_f64() * 2.0 - 1.0) as f32 * scale),
+            }
+        };
+        let bits = |v: [f32; 3]| v.map(f32::to_bits);
+        for _ in 0..200_000 {
+            let (a, b) = (vector(&mut rng), vector(&mut rng));
+            let (na, nb) = normalize2(a, b);
+            assert_eq!(bits(na), bits(normalize(a)), "{a:?}");
+            assert_eq!(bits(nb), bits(normalize(b)), "{b:?}");
+        }
+    }
 
     /// The SSE node test equals the scalar one bit for bit on random boxes and rays,
     /// axis-parallel rays included; both contain every hit of the quantised test.

@@ -119,6 +119,28 @@ impl Block {
             ((self.ij[1] as usize + y) as f64 / self.n[1] as f64) as f32,
         ]
     }
+
+    /// [`Self::uv`] of three vertices, bit for bit, one `(u, v)` division each (SSE2).
+    #[inline]
+    pub fn uvs(&self, at: [(usize, usize); 3]) -> [[f32; 2]; 3] {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        unsafe {
+            use std::arch::x86_64::{_mm_div_pd, _mm_set_pd, _mm_storeu_pd};
+            let n = _mm_set_pd(self.n[1] as f64, self.n[0] as f64);
+            at.map(|(x, y)| {
+                let ij = _mm_set_pd(
+                    (self.ij[1] as usize + y) as f64,
+                    (self.ij[0] as usize + x) as f64,
+                );
+                let mut q = [0f64; 2];
+                _mm_storeu_pd(q.as_mut_ptr(), _mm_div_pd(ij, n));
+                q.map(|c| c as f32)
+            })
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        at.map(|(x, y)| self.uv(x, y))
+    }
 }
 
 // The header is nine 16-byte lines: its root box (six) and 46 bytes of fields.
@@ -211,6 +233,27 @@ pub fn plane_boxes(b: &Block, coords: &[f32], quadrants: &mut [Box4]) -> Box4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`Block::uvs`] gives [`Block::uv`]'s bits: random grid sizes (1 to 2^20 points a side)
+    /// and positions in them.
+    #[test]
+    fn uvs_are_uv_bit_for_bit() {
+        let mut rng = crate::harness::rng::SplitMix64(116);
+        for _ in 0..100_000 {
+            let mut r = |n: u64| (rng.next_u64() % n) as u32;
+            let n = [1 + r(1 << 20), 1 + r(1 << 20)];
+            let b = Block {
+                n,
+                ij: [r(n[0] as u64), r(n[1] as u64)],
+                ..Block::default()
+            };
+            let at: [(usize, usize); 3] = std::array::from_fn(|_| (r(9) as usize, r(9) as usize));
+            let got = b.uvs(at);
+            for (k, &(x, y)) in at.iter().enumerate() {
+                assert_eq!(got[k].map(f32::to_bits), b.uv(x, y).map(f32::to_bits));
+            }
+        }
+    }
 
     /// The boxes of a block whose vertex `(x, y)` is `p(x, y)`, point by point: the root,
     /// then the quadrants' nodes if any (the reference for [`plane_boxes`]).

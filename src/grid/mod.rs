@@ -32,7 +32,7 @@ use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
 use crate::dice::{split_off, DicedMesh, GridRegion, LeanDiced};
 use crate::error::{Error, ErrorKind, Result};
-use crate::oct::{oct_decode, oct_encode_all};
+use crate::oct::{oct_decode3, oct_encode_all};
 use block::{plane_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
 use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
@@ -829,7 +829,7 @@ impl GridMesh {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
                 let (x, y, h) = (x as usize, y as usize, h as usize);
-                let uv = grid_corners(x, y, h).map(|(cx, cy)| b.uv(cx, cy));
+                let uv = b.uvs(grid_corners(x, y, h));
                 let level = b.triangle_level(&self.levels, x, y, h);
                 let id = b.triangle(x, y, h);
                 let n = self.corner_normals(leaf);
@@ -837,7 +837,7 @@ impl GridMesh {
             }
             Found::Loose(li) => {
                 let l = &self.loose[li as usize];
-                (l.p, l.n.map(oct_decode), l.uv, l.id, l.face, l.k, l.level)
+                (l.p, oct_decode3(l.n), l.uv, l.id, l.face, l.k, l.level)
             }
         };
         Corners { p, n, uv }.hit(t, b1, b2, id, face, k, level, leaf)
@@ -863,7 +863,7 @@ impl GridMesh {
         match Found::of(leaf) {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
-                grid_corners(x as usize, y as usize, h as usize).map(|(cx, cy)| b.uv(cx, cy))
+                b.uvs(grid_corners(x as usize, y as usize, h as usize))
             }
             Found::Loose(li) => self.loose[li as usize].uv,
         }
@@ -875,10 +875,12 @@ impl GridMesh {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
                 let w = b.cols as usize + 1;
-                grid_corners(x as usize, y as usize, h as usize)
-                    .map(|(cx, cy)| oct_decode(self.normals[b.normal() as usize + cy * w + cx]))
+                oct_decode3(
+                    grid_corners(x as usize, y as usize, h as usize)
+                        .map(|(cx, cy)| self.normals[b.normal() as usize + cy * w + cx]),
+                )
             }
-            Found::Loose(li) => self.loose[li as usize].n.map(oct_decode),
+            Found::Loose(li) => oct_decode3(self.loose[li as usize].n),
         }
     }
 }
