@@ -80,11 +80,12 @@ pub struct GridMesh {
     /// Top level over blocks (primitives `0..blocks.len()`) then strips (primitive
     /// `blocks.len() + i`).
     pub top: Top,
-    /// Per block: offset of its quadrant nodes in `boxes` (`u32::MAX`: none), for the
-    /// traversal's prefetch.
-    pub quadrants: Vec<u32>,
-    /// Per block: offset of its coordinates, for the traversal's prefetch.
-    pub verts: Vec<u32>,
+    /// Per block, then one entry past the last: the offset of its coordinates, and of its
+    /// quadrant nodes in `boxes` (`u32::MAX`: none), for the traversal's prefetch. A block's
+    /// coordinates end where the next one's start, so the prefetch reads its sizes here, in
+    /// one or two adjacent entries (reading them from its header stalled the walk on the
+    /// header's cache miss).
+    pub fetch: Vec<[u32; 2]>,
     /// Number of triangles.
     pub triangles: usize,
     /// Bounds of all vertices (`[min, max]`; inverted when empty).
@@ -511,11 +512,11 @@ impl GridMesh {
         // of the blocks' vertices: put in the top level's depth-first order instead, the
         // headers cost the 316² grid 10 ms of gathering and the rays nothing (the same rays
         // per second within 3%, BENCHMARKS.md, fourteenth step).
-        m.quadrants = headers
+        m.fetch = headers
             .iter()
-            .map(|h| if h.two_level() { h.boxes } else { u32::MAX })
+            .map(|h| [h.vert, if h.two_level() { h.boxes } else { u32::MAX }])
+            .chain([[ncoords as u32, u32::MAX]])
             .collect();
-        m.verts = headers.iter().map(|h| h.vert).collect();
         m.blocks = headers;
         m.strips = strips;
         m.loose = loose;
@@ -530,22 +531,22 @@ impl GridMesh {
     #[inline(always)]
     fn prefetch<const NORMALS: bool>(&self, prim: u32) {
         use crate::prefetch::prefetch_bytes;
-        if let Some(b) = self.blocks.get(prim as usize) {
-            prefetch_bytes(b as *const Block, std::mem::size_of::<Block>());
-            let q = self.quadrants[prim as usize];
+        let i = prim as usize;
+        if let (Some(&[v, q]), Some(&[end, _])) = (self.fetch.get(i), self.fetch.get(i + 1)) {
+            prefetch_bytes(
+                self.blocks.as_ptr().wrapping_add(i),
+                std::mem::size_of::<Block>(),
+            );
             if q != u32::MAX {
                 prefetch_bytes(
                     self.boxes.as_ptr().wrapping_add(q as usize),
                     4 * std::mem::size_of::<Box4>(),
                 );
             }
-            let v = self.verts[prim as usize] as usize;
-            prefetch_bytes(self.coords.as_ptr().wrapping_add(v), 12 * b.num_vertices());
+            let (v, coords) = (v as usize, end.wrapping_sub(v) as usize);
+            prefetch_bytes(self.coords.as_ptr().wrapping_add(v), 4 * coords);
             if NORMALS {
-                prefetch_bytes(
-                    self.normals.as_ptr().wrapping_add(v / 3),
-                    4 * b.num_vertices(),
-                );
+                prefetch_bytes(self.normals.as_ptr().wrapping_add(v / 3), 4 * coords / 3);
             }
         }
     }
@@ -588,8 +589,7 @@ impl GridMesh {
             + self.loose.len() * std::mem::size_of::<Loose>()
             + self.strips.len() * std::mem::size_of::<[u32; 2]>()
             + self.top.bytes()
-            + self.quadrants.len() * 4
-            + self.verts.len() * 4
+            + self.fetch.len() * 8
     }
 
     /// Bounds of the mesh.
