@@ -400,7 +400,8 @@ fn split(items: &mut [Item], c: &Cluster, bins: &mut [[[Bin; BINS]; 3]; 2]) -> (
         return Cluster::halves(items, c.begin, n / 2);
     };
     // Items whose bin is at most `k` go left; each side's centre bounds are taken as its
-    // items are classified (every item is classified once, on the side it ends on).
+    // items are classified (each item on the side it ends on; the one where the two scans
+    // meet may be classified twice, the same way, which bounds do not mind).
     let mut centres = [(F4::INF, F4::NEG_INF); 2];
     let mut classify = |it: &Item| {
         let m = it.centre();
