@@ -206,15 +206,6 @@ fn plan_region(region: usize, g: &GridRegion, out: &mut [Planned], headers: &mut
     made
 }
 
-/// The blocks of region `g`: [`blocks_of`], none when it has no quads.
-fn planned_blocks(g: &GridRegion) -> usize {
-    if g.part.quads[0] > 0 && g.part.quads[1] > 0 {
-        blocks_of(g)
-    } else {
-        0
-    }
-}
-
 /// Space in [`GridMesh`]'s arrays: coordinates, box nodes and levels.
 #[derive(Clone, Copy, Default)]
 struct Extent {
@@ -350,7 +341,7 @@ impl GridMesh {
         let mut chunks: Vec<(std::ops::Range<usize>, usize)> = Vec::new();
         let (mut start, mut count) = (0, 0);
         for (i, g) in d.grids.iter().enumerate() {
-            count += planned_blocks(g);
+            count += blocks_of(g);
             if count >= CHUNK || i + 1 == d.grids.len() {
                 chunks.push((start..i + 1, count));
                 (start, count) = (i + 1, 0);
@@ -379,10 +370,7 @@ impl GridMesh {
             .map(|(regions, plans, headers)| {
                 let mut at = 0;
                 for i in regions {
-                    let g = &d.grids[i];
-                    if planned_blocks(g) > 0 {
-                        at += plan_region(i, g, &mut plans[at..], &mut headers[at..]);
-                    }
+                    at += plan_region(i, &d.grids[i], &mut plans[at..], &mut headers[at..]);
                 }
                 headers.iter_mut().fold(Extent::default(), |e, h| {
                     e.offset(h);
