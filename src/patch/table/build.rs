@@ -17,6 +17,7 @@ use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
 use crate::refine::step;
 use crate::refine::{edit, Level};
+use std::mem::MaybeUninit;
 
 /// The faces of `level` that share a vertex with a face an edit's path has reached
 /// (`tracks`: edit, face, rotation): they are refined further, so that every patch whose
@@ -74,32 +75,14 @@ impl PatchTable {
         self.nodes[slot as usize] = Node::Leaf((self.patches.len() - 1) as u32);
     }
 
-    /// Makes node `slot` a Stam patch at `depth`: extraordinary corner `corner`, control
-    /// points `verts` (indices into the table's refined vertices, [`stam::gather`]'s order).
-    fn add_stam(&mut self, slot: u32, corner: usize, verts: &[u32], depth: usize) {
-        let valence = (verts.len() - 8) / 2;
+    /// Makes Stam's matrices for `valence` if no patch has needed them yet.
+    fn make_stam_basis(&mut self, valence: usize) {
         if self.stam.len() <= valence {
             self.stam.resize(valence + 1, None);
         }
         if self.stam[valence].is_none() {
             self.stam[valence] = Some(stam::basis(valence));
         }
-        let first = self.point_stencils.len() as u32;
-        for &v in verts {
-            self.point_stencils.push_terms(&[(v, 1.0)]);
-        }
-        self.add_leaf(
-            slot,
-            Patch {
-                kind: PatchKind::Stam {
-                    valence: valence as u8,
-                    corner: corner as u8,
-                },
-                level: depth as u8,
-                first_point: first,
-                ..Patch::UNSET
-            },
-        );
     }
 
     fn new_node(&mut self, face: u32, sub: u8, frame: Frame) -> u32 {
@@ -108,85 +91,32 @@ impl PatchTable {
         (self.nodes.len() - 1) as u32
     }
 
-    /// Settles face `g` of a level (whose vertices are numbered from `offset` among the
-    /// table's refined vertices) into node `slot`, as [`decide`] found it (`rows`: its
-    /// control points' combinations, one per point; `direct`: a direct patch's vertices): a
-    /// hole, a regular patch, a Stam patch, an end cap at the maximum level, or a face to
-    /// refine further (returned).
-    fn settle<'a>(
-        &mut self,
-        found: Found,
-        mut rows: impl Iterator<Item = &'a [(u32, f64)]>,
-        direct: &mut impl Iterator<Item = &'a [u32]>,
-        offset: u32,
-        (g, slot): (usize, u32),
-        depth: usize,
-    ) -> Option<(u32, Slot)> {
-        match found {
-            Found::Hole => {
-                self.nodes[slot as usize] = Node::Empty;
-                None
-            }
-            Found::Stam(corner, n) => {
-                let verts: Vec<u32> = rows.by_ref().take(n).map(|r| offset + r[0].0).collect();
-                self.add_stam(slot, corner, &verts, depth);
-                None
-            }
-            Found::Direct(kind) | Found::Regular(kind) => {
-                let is_direct = matches!(found, Found::Direct(_));
-                let first = if is_direct {
-                    let first = self.direct.len() as u32;
-                    let verts = direct.next().expect("a direct patch's 16 vertices");
-                    self.direct.extend(verts.iter().map(|&v| offset + v));
-                    first
-                } else {
-                    let first = self.point_stencils.len() as u32;
-                    for _ in 0..16 {
-                        let row = rows.next().expect("a regular patch's 16 rows");
-                        self.point_stencils
-                            .push_iter(row.iter().map(|&(v, w)| (offset + v, w)));
-                    }
-                    first
-                };
-                self.add_leaf(
-                    slot,
-                    Patch {
-                        kind: patch_kind(kind),
-                        level: depth as u8,
-                        first_point: first,
-                        direct: is_direct,
-                        end_cap: 0,
-                        ..Patch::UNSET
-                    },
-                );
-                None
-            }
-            Found::Irregular if depth >= self.options.max_level => {
-                Some((g as u32, Slot::Cap(slot)))
-            }
-            Found::Irregular => Some((g as u32, Slot::Quad(slot))),
-        }
-    }
-
     /// Decides faces `jobs` (face of `level`, forced) in parallel, in chunks (bounded
-    /// memory), and settles them in order into their nodes `slot_of(i)`: the table comes out
-    /// as a sequential pass would make it. Each worker writes its decisions and their rows
-    /// into buffers of its own (a few allocations per chunk, not one per row freed by
-    /// another thread). Returns the faces to refine further.
+    /// memory), and settles them into their nodes `slot_of(i)`, in parallel too: each run of
+    /// decisions knows how many patches, control-point rows and direct vertices it adds, so
+    /// its output is written in place where a sequential pass in job order would have put it
+    /// (the table is the same). Each worker writes its decisions and their rows into buffers
+    /// of its own (a few allocations per chunk, not one per row freed by another thread).
+    /// Returns the faces to refine further.
     fn settle_all(
         &mut self,
         level: &Level,
         offset: u32,
         jobs: &[(u32, bool)],
-        slot_of: impl Fn(usize) -> u32,
+        slot_of: impl Fn(usize) -> u32 + Sync,
         depth: usize,
     ) -> Vec<(u32, Slot)> {
         use rayon::prelude::*;
         const CHUNK: usize = 8192;
         let (single_crease, use_stam) = (self.options.single_crease, self.use_stam);
         let mut out = Vec::new();
-        let mut next = 0;
-        for chunk in jobs.chunks(CHUNK) {
+        // At most a patch per job, sixteen vertices per direct patch: reserved once (only
+        // what is written is paged in; grown chunk by chunk, the arrays were copied).
+        self.patches.reserve(jobs.len());
+        if depth == 0 {
+            self.direct.reserve(16 * jobs.len());
+        }
+        for (c, chunk) in jobs.chunks(CHUNK).enumerate() {
             let parts: Vec<Decided> = chunk
                 .par_iter()
                 .with_min_len(256)
@@ -203,22 +133,82 @@ impl PatchTable {
                     part
                 })
                 .collect();
-            self.point_stencils.reserve(
-                parts.iter().map(|p| p.ends.len()).sum(),
-                parts.iter().map(|p| p.terms.len()).sum(),
-            );
-            self.patches
-                .reserve(parts.iter().map(|p| p.found.len()).sum());
-            for part in parts {
-                let mut rows = part.rows();
-                let mut direct = part.direct.chunks_exact(16);
+            // Stam's matrices for the valences met, made once before the parallel pass.
+            for part in &parts {
                 for &found in &part.found {
-                    let (g, slot) = (jobs[next].0 as usize, slot_of(next));
-                    next += 1;
-                    let settled =
-                        self.settle(found, &mut rows, &mut direct, offset, (g, slot), depth);
-                    out.extend(settled);
+                    if let Found::Stam(_, n) = found {
+                        self.make_stam_basis((n - 8) / 2);
+                    }
                 }
+            }
+            // Where each part's output starts.
+            let mut at = Sizes {
+                job: c * CHUNK,
+                patches: self.patches.len(),
+                rows: self.point_stencils.len(),
+                terms: self.point_stencils.indices.len(),
+                direct: self.direct.len(),
+            };
+            let sizes: Vec<Sizes> = parts.iter().map(Sizes::of).collect();
+            let mut starts = Vec::with_capacity(parts.len());
+            for n in &sizes {
+                starts.push(at);
+                at = at.add(n);
+            }
+            let first = starts.first().copied().unwrap_or(at);
+            let added_rows = at.rows - first.rows;
+            let Self {
+                patches,
+                point_stencils,
+                direct,
+                node_info,
+                options,
+                ..
+            } = self;
+            let max_level = options.max_level;
+            let node_info = &node_info[..];
+            // Every part's slices of the arrays' spare capacity, filled in parallel.
+            let mut room = Spare {
+                patches: spare(patches, at.patches - first.patches),
+                offsets: spare(&mut point_stencils.offsets, at.rows - first.rows),
+                indices: spare(&mut point_stencils.indices, at.terms - first.terms),
+                weights: spare(&mut point_stencils.weights, at.terms - first.terms),
+                direct: spare(direct, at.direct - first.direct),
+            };
+            let mut work = Vec::with_capacity(parts.len());
+            for ((part, &s), n) in parts.iter().zip(&starts).zip(&sizes) {
+                work.push((part, s, room.split_off(n)));
+            }
+            let settled: Vec<Settled> = work
+                .into_par_iter()
+                .map(|(part, s, slices)| {
+                    settle_part(
+                        part,
+                        s,
+                        slices,
+                        (offset, depth, max_level),
+                        |i| (jobs[i].0, slot_of(i)),
+                        node_info,
+                    )
+                })
+                .collect();
+            // SAFETY: `settle_part` wrote every item of its slices (it checks its counts and
+            // panics otherwise, before these lengths are set), so the arrays' first `at.*`
+            // items are initialised.
+            unsafe {
+                patches.set_len(at.patches);
+                point_stencils
+                    .offsets
+                    .set_len(point_stencils.offsets.len() + added_rows);
+                point_stencils.indices.set_len(at.terms);
+                point_stencils.weights.set_len(at.terms);
+                direct.set_len(at.direct);
+            }
+            for s in settled {
+                for (slot, node) in s.nodes {
+                    self.nodes[slot as usize] = node;
+                }
+                out.extend(s.refine);
             }
         }
         out
@@ -243,6 +233,13 @@ enum Found {
     Irregular,
 }
 
+impl Found {
+    /// Whether the face becomes a patch.
+    fn is_patch(&self) -> bool {
+        matches!(self, Found::Stam(..) | Found::Regular(_) | Found::Direct(_))
+    }
+}
+
 /// A run of decisions and their control points: rows of terms, and direct patches'
 /// vertices, sixteen each (in the level's numbering).
 #[derive(Default)]
@@ -258,14 +255,184 @@ impl Decided {
         self.terms.extend(terms);
         self.ends.push(self.terms.len() as u32);
     }
+}
 
-    /// The rows, in order.
-    fn rows(&self) -> impl Iterator<Item = &[(u32, f64)]> {
-        let starts = std::iter::once(0).chain(self.ends.iter().copied());
-        starts
-            .zip(&self.ends)
-            .map(|(a, &b)| &self.terms[a as usize..b as usize])
+/// Counts of what a run of decisions adds, or where its output starts: jobs, patches,
+/// control-point rows, their terms, direct patches' vertices.
+#[derive(Clone, Copy, Default)]
+struct Sizes {
+    job: usize,
+    patches: usize,
+    rows: usize,
+    terms: usize,
+    direct: usize,
+}
+
+impl Sizes {
+    /// What the run of decisions `part` adds.
+    fn of(part: &Decided) -> Sizes {
+        Sizes {
+            job: part.found.len(),
+            patches: part.found.iter().filter(|f| f.is_patch()).count(),
+            rows: part.ends.len(),
+            terms: part.terms.len(),
+            direct: part.direct.len(),
+        }
     }
+
+    /// Each count plus `n`'s.
+    fn add(self, n: &Sizes) -> Sizes {
+        Sizes {
+            job: self.job + n.job,
+            patches: self.patches + n.patches,
+            rows: self.rows + n.rows,
+            terms: self.terms + n.terms,
+            direct: self.direct + n.direct,
+        }
+    }
+}
+
+/// Uninitialised room at the ends of the table's arrays, where a run of decisions settles.
+struct Spare<'a> {
+    patches: &'a mut [MaybeUninit<Patch>],
+    offsets: &'a mut [MaybeUninit<u32>],
+    indices: &'a mut [MaybeUninit<u32>],
+    weights: &'a mut [MaybeUninit<f64>],
+    direct: &'a mut [MaybeUninit<u32>],
+}
+
+impl<'a> Spare<'a> {
+    /// The room of the next run, which adds `n`.
+    fn split_off(&mut self, n: &Sizes) -> Spare<'a> {
+        use crate::dice::split_off;
+        Spare {
+            patches: split_off(&mut self.patches, n.patches),
+            offsets: split_off(&mut self.offsets, n.rows),
+            indices: split_off(&mut self.indices, n.terms),
+            weights: split_off(&mut self.weights, n.terms),
+            direct: split_off(&mut self.direct, n.direct),
+        }
+    }
+}
+
+/// The first `n` items of `v`'s spare capacity (reserved here).
+fn spare<T>(v: &mut Vec<T>, n: usize) -> &mut [MaybeUninit<T>] {
+    v.reserve(n);
+    &mut v.spare_capacity_mut()[..n]
+}
+
+/// What a run of decisions leaves to be done in order: nodes to set, faces to refine.
+struct Settled {
+    nodes: Vec<(u32, Node)>,
+    refine: Vec<(u32, Slot)>,
+}
+
+/// Settles the run of decisions `part`, whose output starts at `at`, into `out` (exactly
+/// filled): control points' rows (their vertices numbered from `offset` among the table's
+/// refined vertices), direct patches' vertices, the patches (each placed in its node's frame,
+/// `node_info`); job `i`'s face and node are `job(i)`. A hole empties its node; an irregular
+/// face is refined further, or becomes an end cap at the maximum level (returned).
+fn settle_part(
+    part: &Decided,
+    at: Sizes,
+    out: Spare<'_>,
+    (offset, depth, max_level): (u32, usize, usize),
+    job: impl Fn(usize) -> (u32, u32),
+    node_info: &[(u32, u8, Frame)],
+) -> Settled {
+    for ((i, w), &(v, weight)) in out
+        .indices
+        .iter_mut()
+        .zip(out.weights.iter_mut())
+        .zip(&part.terms)
+    {
+        i.write(offset + v);
+        w.write(weight);
+    }
+    for (o, &end) in out.offsets.iter_mut().zip(&part.ends) {
+        o.write(at.terms as u32 + end);
+    }
+    for (o, &v) in out.direct.iter_mut().zip(&part.direct) {
+        o.write(offset + v);
+    }
+    assert!(
+        out.indices.len() == part.terms.len()
+            && out.offsets.len() == part.ends.len()
+            && out.direct.len() == part.direct.len(),
+        "a run's rows and direct vertices fill its room"
+    );
+    let mut settled = Settled {
+        nodes: Vec::with_capacity(part.found.len()),
+        refine: Vec::new(),
+    };
+    let (mut patches, mut row, mut direct) = (0, at.rows as u32, at.direct as u32);
+    for (i, &found) in part.found.iter().enumerate() {
+        let (g, slot) = job(at.job + i);
+        let patch = match found {
+            Found::Hole => {
+                settled.nodes.push((slot, Node::Empty));
+                continue;
+            }
+            Found::Irregular => {
+                settled.refine.push(if depth >= max_level {
+                    (g, Slot::Cap(slot))
+                } else {
+                    (g, Slot::Quad(slot))
+                });
+                continue;
+            }
+            Found::Stam(corner, n) => {
+                row += n as u32;
+                Patch {
+                    kind: PatchKind::Stam {
+                        valence: ((n - 8) / 2) as u8,
+                        corner: corner as u8,
+                    },
+                    first_point: row - n as u32,
+                    ..Patch::UNSET
+                }
+            }
+            Found::Regular(kind) => {
+                row += 16;
+                Patch {
+                    kind: patch_kind(kind),
+                    first_point: row - 16,
+                    ..Patch::UNSET
+                }
+            }
+            Found::Direct(kind) => {
+                direct += 16;
+                Patch {
+                    kind: patch_kind(kind),
+                    first_point: direct - 16,
+                    direct: true,
+                    ..Patch::UNSET
+                }
+            }
+        };
+        let (face, sub, fr) = node_info[slot as usize];
+        out.patches[patches].write(Patch {
+            level: depth as u8,
+            end_cap: 0,
+            face,
+            sub_face: sub,
+            origin: fr.o,
+            axis_u: fr.a,
+            axis_v: fr.b,
+            ..patch
+        });
+        settled
+            .nodes
+            .push((slot, Node::Leaf((at.patches + patches) as u32)));
+        patches += 1;
+    }
+    assert!(
+        patches == out.patches.len()
+            && row as usize == at.rows + part.ends.len()
+            && direct as usize == at.direct + part.direct.len(),
+        "a run's patches fill its room and use its rows"
+    );
+    settled
 }
 
 /// Decides face `g` of `level`, writing its control points' rows to `part`. A `forced` face
@@ -476,8 +643,20 @@ impl PatchTable {
         let mut pending: Vec<(u32, Slot)> = Vec::new();
         // Quads are settled after every root exists (nodes are only made here, so their
         // numbering is unchanged), n-gons are refined first.
-        let mut quads: Vec<(u32, bool)> = Vec::new();
-        let mut quad_slots: Vec<u32> = Vec::new();
+        let mut quads: Vec<(u32, bool)> = Vec::with_capacity(base.num_faces());
+        let mut quad_slots: Vec<u32> = Vec::with_capacity(base.num_faces());
+        // A root per quad, per sub-face of another face (reserved: grown by doubling, the
+        // arrays were copied and paged in again).
+        let roots: usize = (0..base.num_faces())
+            .map(|f| match base.topo.face_size(f) {
+                4 => 1,
+                n => n,
+            })
+            .sum();
+        table.nodes.reserve(roots);
+        table.node_info.reserve(roots);
+        table.roots.reserve(roots);
+        table.root_offsets.reserve(base.num_faces());
         for f in 0..base.num_faces() {
             let n = base.topo.face_size(f);
             if n == 4 {
