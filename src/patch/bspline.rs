@@ -201,7 +201,37 @@ pub struct PointD1 {
 }
 
 /// The four rows of a control grid, each contracted to one point.
-type Rows = [[f64; 3]; 4];
+pub(crate) type Rows = [[f64; 3]; 4];
+
+/// The first half of [`eval_tensor_d1`], the same bits: the four rows of `cp` contracted
+/// along `u` with weights `w` and first-derivative weights `d1` (value rows, derivative rows),
+/// which every point of the same `u` shares.
+#[inline(always)]
+pub(crate) fn contract_u(cp: &ControlGrid, w: &[f64; 4], d1: &[f64; 4]) -> (Rows, Rows) {
+    let mut r = [[0.0; 3]; 4];
+    let mut ru = [[0.0; 3]; 4];
+    for j in 0..4 {
+        for i in 0..4 {
+            let p = &cp[4 * j + i];
+            axpy(&mut r[j], w[i], p);
+            axpy(&mut ru[j], d1[i], p);
+        }
+    }
+    (r, ru)
+}
+
+/// The second half of [`eval_tensor_d1`], the same bits: the rows of [`contract_u`] summed
+/// with weights `w` and first-derivative weights `d1` along `v`.
+#[inline(always)]
+pub(crate) fn finish_v((r, ru): &(Rows, Rows), w: &[f64; 4], d1: &[f64; 4]) -> PointD1 {
+    let mut pt = PointD1::default();
+    for j in 0..4 {
+        axpy(&mut pt.p, w[j], &r[j]);
+        axpy(&mut pt.dv, d1[j], &r[j]);
+        axpy(&mut pt.du, w[j], &ru[j]);
+    }
+    pt
+}
 
 /// The patch of `cp` at the interior points of the lattice `(i / nu, j / nv)`, `0 < i < nu`,
 /// `0 < j < nv`, row by row from `j = 1`: position and first derivatives, bit for bit those of

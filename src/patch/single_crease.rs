@@ -380,20 +380,44 @@ pub fn eval_with_d1(
 /// on edge `crease_edge`: the plain B-spline's where the sharpness is zero.
 #[inline]
 fn bases(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> (Basis, Basis) {
+    (
+        basis_u(crease_edge, curve, u, v),
+        basis_v(crease_edge, curve, u, v),
+    )
+}
+
+/// [`bases`]' weights along `u` (a function of `u` alone).
+#[inline]
+pub(crate) fn basis_u(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> Basis {
     assert!(crease_edge < 4, "crease edge {crease_edge} is not in 0..4");
-    if curve.sharpness() == 0.0 {
-        // No crease: exactly the plain patch.
-        return (Basis::at(u), Basis::at(v));
-    }
-    let t = crease_parameter(crease_edge, u, v);
-    let mut across = curve.basis(t);
-    if reversed(crease_edge) {
-        across = across.reversed();
-    }
-    if across_is_v(crease_edge) {
-        (Basis::at(u), across)
+    if curve.sharpness() == 0.0 || across_is_v(crease_edge) {
+        Basis::at(u)
     } else {
-        (across, Basis::at(v))
+        across(crease_edge, curve, u, v)
+    }
+}
+
+/// [`bases`]' weights along `v` (a function of `v` alone).
+#[inline]
+pub(crate) fn basis_v(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> Basis {
+    assert!(crease_edge < 4, "crease edge {crease_edge} is not in 0..4");
+    if curve.sharpness() == 0.0 || !across_is_v(crease_edge) {
+        Basis::at(v)
+    } else {
+        across(crease_edge, curve, u, v)
+    }
+}
+
+/// The weights across the crease (of `curve`, on edge `crease_edge`) at `(u, v)`: the
+/// curve's at the crease parameter, reversed where it runs against the patch's.
+#[inline]
+fn across(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> Basis {
+    let t = crease_parameter(crease_edge, u, v);
+    let across = curve.basis(t);
+    if reversed(crease_edge) {
+        across.reversed()
+    } else {
+        across
     }
 }
 

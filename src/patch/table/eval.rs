@@ -105,7 +105,7 @@ impl PatchTable {
     }
 
     /// Stam's matrices of `valence`.
-    fn stam_basis(&self, valence: u8) -> &stam::StamBasis {
+    pub(super) fn stam_basis(&self, valence: u8) -> &stam::StamBasis {
         self.stam[valence as usize]
             .as_ref()
             .expect("the table holds the matrices of its Stam patches")
@@ -420,7 +420,7 @@ fn square(f: &Frame) -> [f64; 4] {
 /// Patch `(s, t)` in the frame of a Stam patch whose extraordinary vertex is at corner
 /// `corner`: the frame mapping the local square back to the patch, and the local `(s', t')`
 /// with the extraordinary vertex at `(0, 0)`: `(s, t) = CORNER[c] + s'·UAX[c] + t'·VAX[c]`.
-fn stam_corner(corner: u8, s: f64, t: f64) -> (Frame, f64, f64) {
+pub(super) fn stam_corner(corner: u8, s: f64, t: f64) -> (Frame, f64, f64) {
     let c = corner as usize;
     let rot = Frame {
         o: CORNER[c],

@@ -3,13 +3,13 @@
 //! with what the points of a leaf share (a B-spline's contracted columns, a Stam patch's
 //! regular sub-patches, a single-crease patch's crease pieces) computed once per domain.
 
-use super::eval::LeafParts;
+use super::eval::{stam_corner, LeafParts};
 use super::tree::Frame;
 use super::{PatchKind, PatchTable};
 use crate::coord::FaceCoord;
 use crate::patch::bspline::{self, ControlGrid, PointD1};
-use crate::patch::single_crease::CreaseCurve;
-use crate::patch::stam::StamBasis;
+use crate::patch::single_crease::{self, CreaseCurve};
+use crate::patch::stam::{self, StamBasis};
 
 impl PatchTable {
     /// [`Self::eval_d1`] at the interior points of the lattice `(i / nu, j / nv)` of domain
@@ -59,10 +59,101 @@ impl PatchTable {
             }
         }
         let mut kept = Kept::default();
-        for (p, frame, s, t) in leaves {
-            out(self.leaf_d1(p, frame, s, t, &mut kept));
+        // A B-spline or single-crease leaf's rows contracted along its `s` are shared by
+        // its points of the same `s`: a lattice column's, or a row's where the leaf's frame
+        // is turned (kept per lattice column and per row, the last leaf's each).
+        let (mut by_column, mut by_row) = (vec![Rows::EMPTY; nu as usize], vec![Rows::EMPTY; nv as usize]);
+        for (n, (p, frame, s, t)) in leaves.into_iter().enumerate() {
+            let (i, j) = (n % (nu as usize - 1) + 1, n / (nu as usize - 1) + 1);
+            let patch = &self.patches[p as usize];
+            let pt = match patch.kind {
+                PatchKind::BSpline { .. } => {
+                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get((p, 0), s, || {
+                        bspline::contract_u(&self.grid(patch), &bspline::basis(s), &bspline::basis_d1(s))
+                    });
+                    bspline::finish_v(rows, &bspline::basis(t), &bspline::basis_d1(t))
+                }
+                PatchKind::SingleCrease { edge, sharpness } => {
+                    let curve = kept.curve(p, sharpness as f64);
+                    let edge = edge as usize;
+                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get((p, 0), s, || {
+                        let bu = single_crease::basis_u(edge, curve, s, t);
+                        bspline::contract_u(&self.grid(patch), &bu.w, &bu.d1)
+                    });
+                    let bv = single_crease::basis_v(edge, curve, s, t);
+                    bspline::finish_v(rows, &bv.w, &bv.d1)
+                }
+                // A Stam patch's point in a regular sub-patch (not at the extraordinary
+                // corner): `leaf_d1`'s steps, with the sub-patch's rows shared.
+                PatchKind::Stam { valence, corner } => {
+                    let basis = self.stam_basis(valence);
+                    let first = patch.first_point as usize;
+                    let cps = &self.points[first..first + basis.size];
+                    let (rot, s1, t1) = stam_corner(corner, s, t);
+                    let located = match s1 == 0.0 && t1 == 0.0 {
+                        true => None,
+                        false => stam::locate(s1, t1),
+                    };
+                    let Some((m, q, s2, t2, sub)) = located else {
+                        out(self.leaf_d1(p, frame, s, t, &mut kept));
+                        continue;
+                    };
+                    let frame = frame.then(&rot.then(&sub.child(q)));
+                    let key = (p, 1 + (m as u32) * 4 + q as u32);
+                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(key, s2, || {
+                        let grid = kept.stam_grid(p, basis, (m, q), cps);
+                        bspline::contract_u(&grid, &bspline::basis(s2), &bspline::basis_d1(s2))
+                    });
+                    let pt = bspline::finish_v(rows, &bspline::basis(t2), &bspline::basis_d1(t2));
+                    out(frame.face_point_d1(pt));
+                    continue;
+                }
+                _ => {
+                    out(self.leaf_d1(p, frame, s, t, &mut kept));
+                    continue;
+                }
+            };
+            out(frame.face_point_d1(pt));
         }
         true
+    }
+}
+
+/// A leaf's control rows contracted along `s` ([`bspline::contract_u`]), with the leaf (and
+/// for a Stam patch, `1 + 4m + q` of its sub-patch, 0 otherwise) and the `s` (its bits) they
+/// are for.
+#[derive(Clone)]
+struct Rows {
+    leaf: (u32, u32),
+    s: u64,
+    rows: (bspline::Rows, bspline::Rows),
+}
+
+impl Rows {
+    const EMPTY: Rows = Rows {
+        leaf: (u32::MAX, 0),
+        s: 0,
+        rows: ([[0.0; 3]; 4], [[0.0; 3]; 4]),
+    };
+
+    /// Where the rows along `s` of a leaf whose frame is `frame` are kept: in the lattice
+    /// column's slot, or in the row's where the frame is turned (`s` runs along `v`).
+    #[inline(always)]
+    fn of<'a>(frame: &Frame, (column, row): (&'a mut Rows, &'a mut Rows)) -> &'a mut Rows {
+        match frame.a[0] != 0.0 {
+            true => column,
+            false => row,
+        }
+    }
+
+    /// The rows of leaf `leaf` at `s`: these, or `contract()` when they are another's.
+    #[inline(always)]
+    fn get(&mut self, leaf: (u32, u32), s: f64, contract: impl FnOnce() -> (bspline::Rows, bspline::Rows)) -> &(bspline::Rows, bspline::Rows) {
+        if self.leaf != leaf || self.s != s.to_bits() {
+            self.rows = contract();
+            (self.leaf, self.s) = (leaf, s.to_bits());
+        }
+        &self.rows
     }
 }
 
@@ -74,6 +165,25 @@ struct Kept {
     curves: Vec<(u32, CreaseCurve)>,
     /// Regular sub-patches by Stam patch, depth and quadrant.
     grids: Vec<(u32, u8, u8, ControlGrid)>,
+}
+
+impl Kept {
+    /// Regular sub-patch `(m, q)` of Stam patch `p` (matrices `basis`, control points `cps`).
+    fn stam_grid(
+        &mut self,
+        p: u32,
+        basis: &StamBasis,
+        (m, q): (usize, usize),
+        cps: &[[f64; 3]],
+    ) -> ControlGrid {
+        let key = (p, m as u8, q as u8);
+        if let Some(e) = self.grids.iter().find(|e| (e.0, e.1, e.2) == key) {
+            return e.3;
+        }
+        let grid = basis.grid(m, q, cps);
+        self.grids.push((p, m as u8, q as u8, grid));
+        grid
+    }
 }
 
 impl LeafParts for Kept {
