@@ -52,7 +52,7 @@ impl PatchTable {
             let v = j as f64 / nv as f64;
             for i in 1..nu {
                 let at = FaceCoord::new(face32, k32, i as f64 / nu as f64, v);
-                match self.find_leaf(at) {
+                match self.find_leaf_unframed(at) {
                     Some(leaf) => leaves.push(leaf),
                     None => return false,
                 }
@@ -63,9 +63,10 @@ impl PatchTable {
         // its points of the same `s`: a lattice column's, or a row's where the leaf's frame
         // is turned (kept per lattice column and per row, the last leaf's each).
         let (mut by_column, mut by_row) = (vec![Rows::EMPTY; nu as usize], vec![Rows::EMPTY; nv as usize]);
-        for (n, (p, frame, s, t)) in leaves.into_iter().enumerate() {
+        for (n, (p, s, t)) in leaves.into_iter().enumerate() {
             let (i, j) = (n % (nu as usize - 1) + 1, n / (nu as usize - 1) + 1);
             let patch = &self.patches[p as usize];
+            let frame = patch.frame();
             let pt = match patch.kind {
                 PatchKind::BSpline { .. } => {
                     let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get((p, 0), s, || {

@@ -122,6 +122,16 @@ pub struct Patch {
 }
 
 impl Patch {
+    /// The patch's frame within its domain: the frame of its node, the same bits as the
+    /// quadtree's descent composes.
+    pub(crate) fn frame(&self) -> Frame {
+        Frame {
+            o: self.origin,
+            a: self.axis_u,
+            b: self.axis_v,
+        }
+    }
+
     /// Placeholder for the fields filled in when a patch is attached to its node.
     const UNSET: Patch = Patch {
         kind: PatchKind::EndCap,
