@@ -195,6 +195,17 @@ fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFa
     {
         return None;
     }
+    // A sharp edge at the extraordinary vertex or a sharp corner of the face: refused by the
+    // smoothness test below after the walk (which the faces beside a crease, isolated level
+    // after level, paid every time).
+    let sharp_edge = |e: &u32| level.edge_sharpness[*e as usize] != 0.0;
+    if topo.vertex_edges(ev as usize).iter().any(sharp_edge)
+        || fv
+            .iter()
+            .any(|&v| level.vertex_sharpness[v as usize] != 0.0)
+    {
+        return None;
+    }
     let mut out = vec![ev];
     let mut faces = Vec::with_capacity(n + 12);
     walk(level, ev, f, n, |g, j| {

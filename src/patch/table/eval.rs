@@ -173,7 +173,8 @@ impl PatchTable {
     /// [`Self::find_leaf`] without the frame (the leaf's [`Patch::frame`] is the same).
     #[inline(always)]
     pub(super) fn find_leaf_unframed(&self, at: FaceCoord) -> Option<(u32, f64, f64)> {
-        self.descend_to_leaf::<false>(at).map(|(p, _, s, t)| (p, s, t))
+        self.descend_to_leaf::<false>(at)
+            .map(|(p, _, s, t)| (p, s, t))
     }
 
     /// [`Self::find_leaf`], the frame followed down only with `FRAME` (the unit frame is

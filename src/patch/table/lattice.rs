@@ -62,25 +62,40 @@ impl PatchTable {
         // A B-spline or single-crease leaf's rows contracted along its `s` are shared by
         // its points of the same `s`: a lattice column's, or a row's where the leaf's frame
         // is turned (kept per lattice column and per row, the last leaf's each).
-        let (mut by_column, mut by_row) = (vec![Rows::EMPTY; nu as usize], vec![Rows::EMPTY; nv as usize]);
+        let (mut by_column, mut by_row) = (
+            vec![Rows::EMPTY; nu as usize],
+            vec![Rows::EMPTY; nv as usize],
+        );
         for (n, (p, s, t)) in leaves.into_iter().enumerate() {
             let (i, j) = (n % (nu as usize - 1) + 1, n / (nu as usize - 1) + 1);
             let patch = &self.patches[p as usize];
             let frame = patch.frame();
             let pt = match patch.kind {
                 PatchKind::BSpline { .. } => {
-                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get((p, 0), s, || {
-                        bspline::contract_u(&self.grid(patch), &bspline::basis(s), &bspline::basis_d1(s))
-                    });
+                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(
+                        (p, 0),
+                        s,
+                        || {
+                            bspline::contract_u(
+                                &self.grid(patch),
+                                &bspline::basis(s),
+                                &bspline::basis_d1(s),
+                            )
+                        },
+                    );
                     bspline::finish_v(rows, &bspline::basis(t), &bspline::basis_d1(t))
                 }
                 PatchKind::SingleCrease { edge, sharpness } => {
                     let curve = kept.curve(p, sharpness as f64);
                     let edge = edge as usize;
-                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get((p, 0), s, || {
-                        let bu = single_crease::basis_u(edge, curve, s, t);
-                        bspline::contract_u(&self.grid(patch), &bu.w, &bu.d1)
-                    });
+                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(
+                        (p, 0),
+                        s,
+                        || {
+                            let bu = single_crease::basis_u(edge, curve, s, t);
+                            bspline::contract_u(&self.grid(patch), &bu.w, &bu.d1)
+                        },
+                    );
                     let bv = single_crease::basis_v(edge, curve, s, t);
                     bspline::finish_v(rows, &bv.w, &bv.d1)
                 }
@@ -101,10 +116,11 @@ impl PatchTable {
                     };
                     let frame = frame.then(&rot.then(&sub.child(q)));
                     let key = (p, 1 + (m as u32) * 4 + q as u32);
-                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(key, s2, || {
-                        let grid = kept.stam_grid(p, basis, (m, q), cps);
-                        bspline::contract_u(&grid, &bspline::basis(s2), &bspline::basis_d1(s2))
-                    });
+                    let rows =
+                        Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(key, s2, || {
+                            let grid = kept.stam_grid(p, basis, (m, q), cps);
+                            bspline::contract_u(&grid, &bspline::basis(s2), &bspline::basis_d1(s2))
+                        });
                     let pt = bspline::finish_v(rows, &bspline::basis(t2), &bspline::basis_d1(t2));
                     out(frame.face_point_d1(pt));
                     continue;
@@ -149,7 +165,12 @@ impl Rows {
 
     /// The rows of leaf `leaf` at `s`: these, or `contract()` when they are another's.
     #[inline(always)]
-    fn get(&mut self, leaf: (u32, u32), s: f64, contract: impl FnOnce() -> (bspline::Rows, bspline::Rows)) -> &(bspline::Rows, bspline::Rows) {
+    fn get(
+        &mut self,
+        leaf: (u32, u32),
+        s: f64,
+        contract: impl FnOnce() -> (bspline::Rows, bspline::Rows),
+    ) -> &(bspline::Rows, bspline::Rows) {
         if self.leaf != leaf || self.s != s.to_bits() {
             self.rows = contract();
             (self.leaf, self.s) = (leaf, s.to_bits());
