@@ -33,6 +33,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
 use crate::oct::oct_encode_all;
 use crate::patch::bspline::PointD1;
+use crate::patch::table::Kept;
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
@@ -727,9 +728,18 @@ fn dice_with(
                         put(i, eval_point(table, displacer.as_ref(), face, k, u, v)?);
                     }
                 } else {
+                    // A domain's points in a row (an edge's) share their leaves' parts.
                     scratch.points.clear();
+                    let mut domain = None;
                     for i in 0..jobs.len() {
-                        scratch.points.push(table.eval_d1(at(i))?);
+                        let at = at(i);
+                        if domain != Some((at.face, at.k)) {
+                            domain = Some((at.face, at.k));
+                            scratch.kept.clear();
+                        }
+                        scratch
+                            .points
+                            .push(table.eval_d1_kept(at, &mut scratch.kept)?);
                     }
                     scratch.finish(table, at, put)?;
                 }
@@ -916,6 +926,8 @@ struct Scratch {
 struct LatticeScratch {
     points: Vec<PointD1>,
     normals: Vec<[f64; 3]>,
+    /// The leaves' parts that a run's points share.
+    kept: Kept,
 }
 
 impl LatticeScratch {

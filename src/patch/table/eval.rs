@@ -42,6 +42,15 @@ impl PatchTable {
     /// [`Self::eval`]'s position and first derivatives, the same bits, without the second
     /// derivatives' work where the leaf is a B-spline patch (what dicing needs).
     pub fn eval_d1(&self, at: FaceCoord) -> Result<PointD1> {
+        self.eval_d1_with(at, &mut Recent::default())
+    }
+
+    /// [`Self::eval_d1`] with the parts of leaves shared between points from `parts`.
+    pub(super) fn eval_d1_with(
+        &self,
+        at: FaceCoord,
+        parts: &mut impl LeafParts,
+    ) -> Result<PointD1> {
         let d1 = |s: &Sample| PointD1 {
             p: s.p,
             du: s.du,
@@ -55,7 +64,7 @@ impl PatchTable {
             return self.eval(at).map(|s| d1(&s));
         }
         let (p, frame, s, t) = self.leaf_index(at)?;
-        Ok(self.leaf_d1(p, frame, s, t, &mut Recent::default()))
+        Ok(self.leaf_d1(p, frame, s, t, parts))
     }
 
     /// [`Self::eval_d1`] at `(s, t)` of leaf patch `p`, whose frame within its domain is

@@ -180,9 +180,9 @@ impl Rows {
 }
 
 /// The shared parts of the leaves of one domain, kept while its points are evaluated (a
-/// domain has a few leaves: a linear search finds them).
+/// domain has a few leaves: a linear search finds them); also [`PatchTable::eval_d1_kept`]'s.
 #[derive(Default)]
-struct Kept {
+pub(crate) struct Kept {
     /// Crease pieces by single-crease patch.
     curves: Vec<(u32, CreaseCurve)>,
     /// Regular sub-patches by Stam patch, depth and quadrant.
@@ -205,6 +205,28 @@ impl Kept {
         let grid = basis.grid(m, q, cps);
         self.grids.push((p, m as u8, q as u8, grid));
         grid
+    }
+}
+
+impl Kept {
+    /// Forgets every leaf's parts (before the points of other leaves, so that the searches
+    /// stay short).
+    pub(crate) fn clear(&mut self) {
+        self.curves.clear();
+        self.grids.clear();
+    }
+}
+
+impl PatchTable {
+    /// [`Self::eval_d1`], the same bits, with the parts of leaves that points share (a
+    /// single-crease patch's crease pieces, a Stam patch's sub-patches) kept in `kept` for the
+    /// next points (made once, not once per point).
+    pub(crate) fn eval_d1_kept(
+        &self,
+        at: FaceCoord,
+        kept: &mut Kept,
+    ) -> crate::error::Result<PointD1> {
+        self.eval_d1_with(at, kept)
     }
 }
 

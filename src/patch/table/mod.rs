@@ -22,6 +22,7 @@ mod build;
 mod end_cap;
 mod eval;
 mod lattice;
+pub(crate) use lattice::Kept;
 pub mod loop_pieces;
 pub mod pieces;
 pub(crate) mod tree;
