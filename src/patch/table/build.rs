@@ -175,17 +175,22 @@ impl PatchTable {
                 weights: spare(&mut point_stencils.weights, at.terms - first.terms),
                 direct: spare(direct, at.direct - first.direct),
             };
+            // Each job's node, if it is settled (made here, not in the workers: their
+            // allocations would grow heaps of their own).
+            let mut nodes = vec![None; chunk.len()];
             let mut work = Vec::with_capacity(parts.len());
+            let mut rest = &mut nodes[..];
             for ((part, &s), n) in parts.iter().zip(&starts).zip(&sizes) {
-                work.push((part, s, room.split_off(n)));
+                let part_nodes = crate::dice::split_off(&mut rest, n.job);
+                work.push((part, s, room.split_off(n), part_nodes));
             }
-            let settled: Vec<Settled> = work
+            let refine: Vec<Vec<(u32, Slot)>> = work
                 .into_par_iter()
-                .map(|(part, s, slices)| {
+                .map(|(part, s, slices, nodes)| {
                     settle_part(
                         part,
                         s,
-                        slices,
+                        (slices, nodes),
                         (offset, depth, max_level),
                         |i| (jobs[i].0, slot_of(i)),
                         node_info,
@@ -204,12 +209,12 @@ impl PatchTable {
                 point_stencils.weights.set_len(at.terms);
                 direct.set_len(at.direct);
             }
-            for s in settled {
-                for (slot, node) in s.nodes {
-                    self.nodes[slot as usize] = node;
+            for (i, node) in nodes.into_iter().enumerate() {
+                if let Some(node) = node {
+                    self.nodes[slot_of(c * CHUNK + i) as usize] = node;
                 }
-                out.extend(s.refine);
             }
+            out.extend(refine.into_iter().flatten());
         }
         out
     }
@@ -321,25 +326,20 @@ fn spare<T>(v: &mut Vec<T>, n: usize) -> &mut [MaybeUninit<T>] {
     &mut v.spare_capacity_mut()[..n]
 }
 
-/// What a run of decisions leaves to be done in order: nodes to set, faces to refine.
-struct Settled {
-    nodes: Vec<(u32, Node)>,
-    refine: Vec<(u32, Slot)>,
-}
-
 /// Settles the run of decisions `part`, whose output starts at `at`, into `out` (exactly
 /// filled): control points' rows (their vertices numbered from `offset` among the table's
 /// refined vertices), direct patches' vertices, the patches (each placed in its node's frame,
-/// `node_info`); job `i`'s face and node are `job(i)`. A hole empties its node; an irregular
-/// face is refined further, or becomes an end cap at the maximum level (returned).
+/// `node_info`), and each job's node in `nodes`; job `i`'s face and node are `job(i)`. A hole
+/// empties its node; an irregular face (no node yet) is refined further, or becomes an end cap
+/// at the maximum level (returned, in order).
 fn settle_part(
     part: &Decided,
     at: Sizes,
-    out: Spare<'_>,
+    (out, nodes): (Spare<'_>, &mut [Option<Node>]),
     (offset, depth, max_level): (u32, usize, usize),
     job: impl Fn(usize) -> (u32, u32),
     node_info: &[(u32, u8, Frame)],
-) -> Settled {
+) -> Vec<(u32, Slot)> {
     for ((i, w), &(v, weight)) in out
         .indices
         .iter_mut()
@@ -357,24 +357,22 @@ fn settle_part(
     }
     assert!(
         out.indices.len() == part.terms.len()
+            && out.weights.len() == part.terms.len()
             && out.offsets.len() == part.ends.len()
             && out.direct.len() == part.direct.len(),
         "a run's rows and direct vertices fill its room"
     );
-    let mut settled = Settled {
-        nodes: Vec::with_capacity(part.found.len()),
-        refine: Vec::new(),
-    };
+    let mut refine = Vec::new();
     let (mut patches, mut row, mut direct) = (0, at.rows as u32, at.direct as u32);
     for (i, &found) in part.found.iter().enumerate() {
         let (g, slot) = job(at.job + i);
         let patch = match found {
             Found::Hole => {
-                settled.nodes.push((slot, Node::Empty));
+                nodes[i] = Some(Node::Empty);
                 continue;
             }
             Found::Irregular => {
-                settled.refine.push(if depth >= max_level {
+                refine.push(if depth >= max_level {
                     (g, Slot::Cap(slot))
                 } else {
                     (g, Slot::Quad(slot))
@@ -421,9 +419,7 @@ fn settle_part(
             axis_v: fr.b,
             ..patch
         });
-        settled
-            .nodes
-            .push((slot, Node::Leaf((at.patches + patches) as u32)));
+        nodes[i] = Some(Node::Leaf((at.patches + patches) as u32));
         patches += 1;
     }
     assert!(
@@ -432,7 +428,7 @@ fn settle_part(
             && direct as usize == at.direct + part.direct.len(),
         "a run's patches fill its room and use its rows"
     );
-    settled
+    refine
 }
 
 /// Decides face `g` of `level`, writing its control points' rows to `part`. A `forced` face

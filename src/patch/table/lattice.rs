@@ -1,7 +1,8 @@
 //! A domain's lattice of points evaluated at once: [`PatchTable::eval`]'s position and first
 //! derivatives at every interior point of `(i / nu, j / nv)`, the same bits as point by point,
 //! with what the points of a leaf share (a B-spline's contracted columns, a Stam patch's
-//! regular sub-patches, a single-crease patch's crease pieces) computed once per domain.
+//! regular sub-patches, a single-crease patch's crease pieces, a leaf's control rows
+//! contracted along its `s`) computed once per domain.
 
 use super::eval::{stam_corner, LeafParts};
 use super::tree::Frame;
@@ -59,9 +60,9 @@ impl PatchTable {
             }
         }
         let mut kept = Kept::default();
-        // A B-spline or single-crease leaf's rows contracted along its `s` are shared by
-        // its points of the same `s`: a lattice column's, or a row's where the leaf's frame
-        // is turned (kept per lattice column and per row, the last leaf's each).
+        // A B-spline, single-crease or Stam sub-patch leaf's rows contracted along its `s`
+        // are shared by its points of the same `s`: a lattice column's, or a row's where the
+        // leaf's frame is turned (kept per lattice column and per row, the last leaf's each).
         let (mut by_column, mut by_row) = (
             vec![Rows::EMPTY; nu as usize],
             vec![Rows::EMPTY; nv as usize],
@@ -198,17 +199,9 @@ impl Kept {
         (m, q): (usize, usize),
         cps: &[[f64; 3]],
     ) -> ControlGrid {
-        let key = (p, m as u8, q as u8);
-        if let Some(e) = self.grids.iter().find(|e| (e.0, e.1, e.2) == key) {
-            return e.3;
-        }
-        let grid = basis.grid(m, q, cps);
-        self.grids.push((p, m as u8, q as u8, grid));
-        grid
+        stam_grid(&mut self.grids, p, basis, (m, q), cps)
     }
-}
 
-impl Kept {
     /// Forgets every leaf's parts (before the points of other leaves, so that the searches
     /// stay short).
     pub(crate) fn clear(&mut self) {
@@ -252,15 +245,27 @@ impl LeafParts for Kept {
     ) -> (PointD1, Frame) {
         let grids = &mut self.grids;
         basis.eval_local_d1(cps, s, t, &mut |m, q| {
-            let key = (p, m as u8, q as u8);
-            if let Some(e) = grids.iter().find(|e| (e.0, e.1, e.2) == key) {
-                return e.3;
-            }
-            let grid = basis.grid(m, q, cps);
-            grids.push((p, m as u8, q as u8, grid));
-            grid
+            stam_grid(grids, p, basis, (m, q), cps)
         })
     }
+}
+
+/// Regular sub-patch `(m, q)` of Stam patch `p` (matrices `basis`, control points `cps`),
+/// from `grids` (by patch, depth and quadrant), where it is added the first time.
+fn stam_grid(
+    grids: &mut Vec<(u32, u8, u8, ControlGrid)>,
+    p: u32,
+    basis: &StamBasis,
+    (m, q): (usize, usize),
+    cps: &[[f64; 3]],
+) -> ControlGrid {
+    let key = (p, m as u8, q as u8);
+    if let Some(e) = grids.iter().find(|e| (e.0, e.1, e.2) == key) {
+        return e.3;
+    }
+    let grid = basis.grid(m, q, cps);
+    grids.push((p, m as u8, q as u8, grid));
+    grid
 }
 
 #[cfg(test)]
@@ -326,6 +331,38 @@ mod tests {
             kinds.iter().all(|&n| n > 0),
             "leaves under trees by kind: {kinds:?}"
         );
+    }
+
+    /// `eval_d1_kept` equals `eval_d1` bit for bit (signs of zeros included) at points in
+    /// rows along each domain's sides and diagonal, as shared points come (the parts kept
+    /// from point to point, and from domain to domain where they are not cleared), on meshes
+    /// with B-spline, single-crease, Stam and end-cap leaves; holes are errors for both.
+    #[test]
+    fn kept_is_eval_bit_for_bit() {
+        let bits = |p: super::PointD1| [p.p, p.du, p.dv].map(|v| v.map(f64::to_bits));
+        for table in tables() {
+            let mut kept = super::Kept::default();
+            for f in 0..table.num_faces() {
+                for k in 0..table.sub_faces(f) {
+                    for i in 0..=16 {
+                        let t = i as f64 / 16.0;
+                        for (u, v) in [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t), (t, t)] {
+                            let at = FaceCoord::new(f as u32, k as u32, u, v);
+                            match (table.eval_d1(at), table.eval_d1_kept(at, &mut kept)) {
+                                (Ok(a), Ok(b)) => {
+                                    assert_eq!(bits(a), bits(b), "({f}, {k}) at ({u}, {v})")
+                                }
+                                (Err(_), Err(_)) => {}
+                                (a, b) => panic!("({f}, {k}) at ({u}, {v}): {a:?} but {b:?}"),
+                            }
+                        }
+                    }
+                    if f % 2 == 0 {
+                        kept.clear();
+                    }
+                }
+            }
+        }
     }
 
     /// A hole at a lattice point leaves the whole domain to point-by-point evaluation (which
