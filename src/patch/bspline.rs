@@ -246,29 +246,14 @@ pub fn eval_lattice(cp: &ControlGrid, nu: u32, nv: u32, mut out: impl FnMut(Poin
     let cols: Vec<(Rows, Rows)> = (1..nu)
         .map(|i| {
             let bu = Basis::at(i as f64 / nu as f64);
-            let mut r = [[0.0; 3]; 4];
-            let mut ru = [[0.0; 3]; 4];
-            for j in 0..4 {
-                for i in 0..4 {
-                    let p = &cp[4 * j + i];
-                    axpy(&mut r[j], bu.w[i], p);
-                    axpy(&mut ru[j], bu.d1[i], p);
-                }
-            }
-            (r, ru)
+            contract_u(cp, &bu.w, &bu.d1)
         })
         .collect();
     for j in 1..nv {
         let t = j as f64 / nv as f64;
         let (w, d1) = (basis(t), basis_d1(t));
-        for (r, ru) in &cols {
-            let mut pt = PointD1::default();
-            for j in 0..4 {
-                axpy(&mut pt.p, w[j], &r[j]);
-                axpy(&mut pt.dv, d1[j], &r[j]);
-                axpy(&mut pt.du, w[j], &ru[j]);
-            }
-            out(pt);
+        for rows in &cols {
+            out(finish_v(rows, &w, &d1));
         }
     }
 }
