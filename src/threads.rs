@@ -65,6 +65,14 @@ pub fn min_len() -> usize {
     }
 }
 
+/// The first `n` items of `rest`, which keeps the others (a worker's share of an output
+/// split between workers in order).
+pub(crate) fn split_off<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+    let (head, tail) = std::mem::take(rest).split_at_mut(n);
+    *rest = tail;
+    head
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -37,6 +37,7 @@ use crate::patch::table::Kept;
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
+use crate::threads::split_off;
 use crate::vec3::{norm, sub};
 use normals::unit_normal;
 use rayon::prelude::*;
@@ -822,13 +823,6 @@ fn dice_with(
         },
     )?;
     Ok((out, levels, codes))
-}
-
-/// The first `n` items of `rest`, which keeps the others.
-pub(crate) fn split_off<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
-    let (head, tail) = std::mem::take(rest).split_at_mut(n);
-    *rest = tail;
-    head
 }
 
 /// Flag of a domain-local vertex index in a domain's triangles before they are stored.

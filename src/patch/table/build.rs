@@ -17,6 +17,7 @@ use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
 use crate::refine::step;
 use crate::refine::{edit, Level};
+use crate::threads::split_off;
 use std::mem::MaybeUninit;
 
 /// The faces of `level` that share a vertex with a face an edit's path has reached
@@ -181,7 +182,7 @@ impl PatchTable {
             let mut work = Vec::with_capacity(parts.len());
             let mut rest = &mut nodes[..];
             for ((part, &s), n) in parts.iter().zip(&starts).zip(&sizes) {
-                let part_nodes = crate::dice::split_off(&mut rest, n.job);
+                let part_nodes = split_off(&mut rest, n.job);
                 work.push((part, s, room.split_off(n), part_nodes));
             }
             let refine: Vec<Vec<(u32, Slot)>> = work
@@ -309,7 +310,6 @@ struct Spare<'a> {
 impl<'a> Spare<'a> {
     /// The room of the next run, which adds `n`.
     fn split_off(&mut self, n: &Sizes) -> Spare<'a> {
-        use crate::dice::split_off;
         Spare {
             patches: split_off(&mut self.patches, n.patches),
             offsets: split_off(&mut self.offsets, n.rows),
@@ -366,7 +366,9 @@ fn settle_part(
     let (mut patches, mut row, mut direct) = (0, at.rows as u32, at.direct as u32);
     for (i, &found) in part.found.iter().enumerate() {
         let (g, slot) = job(at.job + i);
-        let patch = match found {
+        // The patch's kind, its first control point (a row, or a direct patch's first
+        // vertex) and whether it is direct.
+        let (kind, first_point, is_direct) = match found {
             Found::Hole => {
                 nodes[i] = Some(Node::Empty);
                 continue;
@@ -380,44 +382,34 @@ fn settle_part(
                 continue;
             }
             Found::Stam(corner, n) => {
+                let kind = PatchKind::Stam {
+                    valence: ((n - 8) / 2) as u8,
+                    corner: corner as u8,
+                };
                 row += n as u32;
-                Patch {
-                    kind: PatchKind::Stam {
-                        valence: ((n - 8) / 2) as u8,
-                        corner: corner as u8,
-                    },
-                    first_point: row - n as u32,
-                    ..Patch::UNSET
-                }
+                (kind, row - n as u32, false)
             }
             Found::Regular(kind) => {
                 row += 16;
-                Patch {
-                    kind: patch_kind(kind),
-                    first_point: row - 16,
-                    ..Patch::UNSET
-                }
+                (patch_kind(kind), row - 16, false)
             }
             Found::Direct(kind) => {
                 direct += 16;
-                Patch {
-                    kind: patch_kind(kind),
-                    first_point: direct - 16,
-                    direct: true,
-                    ..Patch::UNSET
-                }
+                (patch_kind(kind), direct - 16, true)
             }
         };
         let (face, sub, fr) = node_info[slot as usize];
         out.patches[patches].write(Patch {
+            kind,
             level: depth as u8,
+            first_point,
+            direct: is_direct,
             end_cap: 0,
             face,
             sub_face: sub,
             origin: fr.o,
             axis_u: fr.a,
             axis_v: fr.b,
-            ..patch
         });
         nodes[i] = Some(Node::Leaf((at.patches + patches) as u32));
         patches += 1;
