@@ -239,7 +239,7 @@ impl Surface {
     /// queries.
     pub fn bvh(&self, options: &DiceOptions) -> Result<TracedSurface> {
         Ok(TracedSurface {
-            bvh: GridMesh::build_lean(&crate::dice::dice_lean(&self.table, &self.mesh, options)?)?,
+            bvh: GridMesh::dice(&self.table, &self.mesh, options)?,
         })
     }
 }

@@ -12,7 +12,7 @@ mod common;
 mod oracle;
 
 use limitray::bvh::{intersect_triangle, Hit, MeshBvh, Ray};
-use limitray::dice::{dice, dice_lean, DiceOptions, DiceRate, DicedMesh, Displacement};
+use limitray::dice::{dice, DiceOptions, DiceRate, DicedMesh, Displacement};
 use limitray::grid::GridMesh;
 use limitray::harness::probe::aimed_rays;
 use limitray::harness::rays::random_rays;
@@ -236,13 +236,14 @@ fn uniform_rates_are_all_grid() {
     }
 }
 
-/// Lean dicing (`dice_lean`, for the grid core alone: no per-point parameters, no records of
-/// one-patch domains' grid triangles) builds exactly the grid mesh of full dicing: every block,
-/// vertex bit, normal code, box, level, loose triangle and top-level node equal, with the same
-/// points and triangles. Closed and open corpus shapes and random creased meshes (n-gons,
+/// Dicing straight into the grid core (`GridMesh::dice`: each domain's blocks and loose
+/// triangles stored from its worker's buffers, no diced mesh made) builds exactly the grid
+/// mesh of the diced mesh (`GridMesh::build` of `dice`): every block, vertex bit, normal
+/// code, box, level, loose triangle and top-level node equal, and the triangles' corners
+/// those of the diced mesh. Closed and open corpus shapes and random creased meshes (n-gons,
 /// non-manifold, holes), uniform and length-based rates, with and without displacement.
 #[test]
-fn lean_dicing_builds_the_same_grid() {
+fn dicing_into_the_grid_builds_the_same_grid() {
     let check = |name: &str, mesh: &ControlMesh, rate: DiceRate, displace: bool| {
         let table = PatchTable::new(mesh, PatchOptions::default()).unwrap();
         let diag = mesh.diagonal();
@@ -254,7 +255,10 @@ fn lean_dicing_builds_the_same_grid() {
                 frequency: 3.0 / diag,
             }),
         };
-        let (full, lean) = match (dice(&table, mesh, &opts), dice_lean(&table, mesh, &opts)) {
+        let (full, fused) = match (
+            dice(&table, mesh, &opts),
+            GridMesh::dice(&table, mesh, &opts),
+        ) {
             (Ok(f), Ok(l)) => (f, l),
             // A mesh dicing refuses (catmark_square_hedit4's hole below the base level): the
             // same error both ways.
@@ -264,9 +268,12 @@ fn lean_dicing_builds_the_same_grid() {
             }
             (f, l) => panic!("{name} {rate:?}: {:?} vs {:?}", f.err(), l.err()),
         };
-        assert_eq!(lean.positions(), &full.positions[..], "{name} {rate:?}");
-        assert_eq!(lean.triangles(), full.triangles, "{name} {rate:?}");
-        assert_eq!(lean.num_triangles(), full.triangles.len());
+        let corners: Vec<[[f32; 3]; 3]> = full
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| full.positions[v as usize]))
+            .collect();
+        assert!(fused.triangle_corners() == corners, "{name} {rate:?}");
         // Every grid vertex read from a region's frame or interior is the corner the region's
         // triangles name.
         for g in &full.grids {
@@ -286,7 +293,7 @@ fn lean_dicing_builds_the_same_grid() {
             }
         }
         let a = GridMesh::build(&full).unwrap();
-        let b = GridMesh::build_lean(&lean).unwrap();
+        let b = fused;
         assert!(
             a == b,
             "{name} {rate:?} displaced {displace}: the grid meshes differ"

@@ -2,7 +2,7 @@
 //! second.
 
 use super::args::{MeshSource, RuleArgs, SurfaceArg, ThreadArgs};
-use crate::dice::{dice, dice_lean, DiceOptions, DiceRate};
+use crate::dice::{dice, DiceOptions, DiceRate};
 use crate::error::Result;
 use crate::grid::GridMesh;
 use crate::harness::rays::{camera_rays, random_rays};
@@ -88,7 +88,9 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             },
         )?;
         let t1 = std::time::Instant::now();
-        let d = dice_lean(
+        // Dicing stores the blocks (`dice_ms`); the grid stage is the strips and the top
+        // level (`grid_ms`).
+        let (bvh, t2) = GridMesh::dice_staged(
             &table,
             &mesh,
             &DiceOptions {
@@ -97,11 +99,8 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
                 displace: args.displace.clone(),
             },
         )?;
-        let t2 = std::time::Instant::now();
-        let tris = d.num_triangles();
-        let bvh = GridMesh::build_lean(&d)?;
-        drop(d);
         let t3 = std::time::Instant::now();
+        let tris = bvh.triangles;
         let bounds = bvh.bounds();
         let ms =
             |a: std::time::Instant, b: std::time::Instant| round((b - a).as_secs_f64() * 1e3, 1);

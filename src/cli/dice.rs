@@ -42,18 +42,17 @@ pub fn dice_mesh(
     Ok((table, d))
 }
 
-/// Builds the patch table, dices `mesh` under `options` for the grid core alone
-/// ([`crate::dice::dice_lean`]) and builds its grid mesh; returns it with the number of
-/// triangles.
+/// Builds the patch table and dices `mesh` under `options` straight into the grid core
+/// ([`crate::grid::GridMesh::dice`]); returns the grid mesh with the number of triangles.
 pub fn dice_grid(
     mesh: &ControlMesh,
     options: crate::mesh::Options,
     args: &DiceArgs,
 ) -> Result<(crate::grid::GridMesh, usize)> {
     let table = table_for(mesh, options, args)?;
-    let d = crate::dice::dice_lean(&table, mesh, &args.options())?;
-    drop(table);
-    Ok((crate::grid::GridMesh::build_lean(&d)?, d.num_triangles()))
+    let grid = crate::grid::GridMesh::dice(&table, mesh, &args.options())?;
+    let triangles = grid.triangles;
+    Ok((grid, triangles))
 }
 
 /// The patch table of `mesh` under `options`, with a warning when the rate is above the

@@ -18,12 +18,14 @@
 //! does a side vertex get a copy per domain: the copy's position is the same `f32` bits.
 
 pub mod displace;
+pub mod each;
 pub mod estimate;
 mod normals;
 mod pattern;
 mod rates;
 
 pub use displace::Displacement;
+pub use each::{dice_each, DiceLayout, DomainPlan, DomainView};
 pub use estimate::DiceEstimate;
 pub use pattern::{pattern, side_uv, GridPart, Pattern};
 pub use rates::{edge_rates, DiceRate, Rates, ScreenRate};
@@ -435,78 +437,34 @@ pub fn estimate_size(
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
 /// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
-    dice_with(table, mesh, opts, false).map(|(d, _, _)| d)
+    prepare(table, mesh, opts, false, |p| p.mesh())
 }
 
-/// A diced surface for the grid core alone ([`crate::grid::GridMesh::build_lean`]): what
-/// [`dice`] gives, less what the grid does not read (the points' [`DicedMesh::params`]; of
-/// the triangles in grid regions, their corners, implicit in the grid, and their records but
-/// the level, none at all where the domain is one patch), so that dicing writes, and pages in,
-/// less memory. The points and triangles are [`dice`]'s, bit for bit.
-#[derive(Debug)]
-pub struct LeanDiced {
-    /// The diced mesh, without parameters, and its grid triangles without corners or records.
-    pub(crate) mesh: DicedMesh,
-    /// Per triangle, the level of the grid triangles of regions without a
-    /// [`GridRegion::level`] (others are 0).
-    pub(crate) levels: Vec<u8>,
-    /// Per point, its normal's octahedral code ([`crate::oct::oct_encode`] of the
-    /// normal [`dice`] gives it), in place of [`DicedMesh::normals`] (left empty).
-    pub(crate) codes: Vec<u32>,
+/// Everything dicing knows before it evaluates a point: the domains, their sizes, and what
+/// [`DomainCtx`] reads (the shared points' positions are filled in once evaluated).
+struct Prepared<'a> {
+    ctx: DomainCtx<'a>,
+    /// Every live domain `(face, k)`, in order.
+    domains: Vec<(u32, u32)>,
+    /// What each adds.
+    sizes: Vec<DomainSize>,
 }
 
-impl LeanDiced {
-    /// The points, as [`DicedMesh::positions`].
-    pub fn positions(&self) -> &[[f32; 3]] {
-        &self.mesh.positions
-    }
+/// Domains per parallel job of the domain pass (each job's outputs are split off in order;
+/// each domain's own within its job's worker: the slices of every domain made up front took a
+/// 316² grid 10 ms and 3,500 page faults, serially).
+const CHUNK: usize = 64;
 
-    /// Number of triangles.
-    pub fn num_triangles(&self) -> usize {
-        self.mesh.triangles.len()
-    }
-
-    /// The triangles, as [`DicedMesh::triangles`] (those of the grids from the grid regions:
-    /// quad `(x, y)` as `[a, b, c]` and `[a, c, d]` from its lower-left corner `a`,
-    /// counter-clockwise).
-    pub fn triangles(&self) -> Vec<[u32; 3]> {
-        let d = &self.mesh;
-        let mut out = d.triangles.clone();
-        for g in &d.grids {
-            let [qc, qr] = g.part.quads;
-            let mut t = g.first_triangle as usize;
-            for y in 0..qr {
-                for x in 0..qc {
-                    let v = |dx: u32, dy: u32| g.vertex(&d.grid_frames, x + dx, y + dy);
-                    let (a, b, c, e) = (v(0, 0), v(1, 0), v(1, 1), v(0, 1));
-                    out[t] = [a, b, c];
-                    out[t + 1] = [a, c, e];
-                    t += 2;
-                }
-            }
-        }
-        out
-    }
-}
-
-/// Dices as [`dice`] does, for [`crate::grid::GridMesh::build_lean`] ([`LeanDiced`]).
-pub fn dice_lean(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<LeanDiced> {
-    dice_with(table, mesh, opts, true).map(|(mesh, levels, codes)| LeanDiced {
-        mesh,
-        levels,
-        codes,
-    })
-}
-
-/// [`dice`]; with `lean`, without the parameters and records [`LeanDiced`] leaves out, with its
-/// grid triangles' levels apart, and with the normals as octahedral codes (both empty
-/// otherwise).
-fn dice_with(
+/// Prepares the dicing of `mesh` (rates, the shared points' layout, the domains' sizes) and
+/// hands it to `then`; with `lean`, domains write no per-point parameters, and of their grid
+/// triangles neither corners nor records, only the levels, apart (see [`dice_each`]).
+fn prepare<R>(
     table: &PatchTable,
     mesh: &ControlMesh,
     opts: &DiceOptions,
     lean: bool,
-) -> Result<(DicedMesh, Vec<u8>, Vec<u32>)> {
+    then: impl FnOnce(&Prepared) -> Result<R>,
+) -> Result<R> {
     // The table's level 0 where it kept it (building it again took 34 ms of the 316² grid's
     // 242 ms of dicing).
     let mut built = None;
@@ -654,43 +612,37 @@ fn dice_with(
             ctx.domain_size(f as usize, k as usize, scratch)
         })
         .collect();
-    let total_points = shared.jobs.len() + sizes.iter().map(|z| z.points).sum::<usize>();
-    let total_tris: usize = sizes.iter().map(|z| z.triangles).sum();
-    if u32::try_from(total_points).is_err() || total_points as u64 >= LOCAL as u64 {
-        return Err(Error::new(
-            ErrorKind::Usage,
-            "diced mesh exceeds 2^31 vertices",
-        ));
+    then(&Prepared {
+        ctx,
+        domains,
+        sizes,
+    })
+}
+
+impl Prepared<'_> {
+    /// Number of shared points (the diced mesh's first vertices).
+    fn num_shared(&self) -> usize {
+        self.ctx.shared.jobs.len()
     }
-    let mut out = DicedMesh {
-        positions: vec![[0.0; 3]; total_points],
-        normals: vec![[0.0; 3]; if lean { 0 } else { total_points }],
-        // Zeroed allocations (every page is first touched by the domain that writes it, in
-        // parallel; `vec![x; n]` of a struct writes every element here, sequentially).
-        params: if lean {
-            Vec::new()
-        } else {
-            bytemuck::zeroed_vec(total_points)
-        },
-        triangles: vec![[0; 3]; total_tris],
-        tri_info: bytemuck::zeroed_vec(total_tris),
-        grids: Vec::with_capacity(sizes.iter().filter(|z| z.grid.is_some()).count()),
-        grid_frames: vec![0; sizes.iter().map(|z| z.frame).sum()],
-    };
-    let mut levels = vec![0u8; if lean { total_tris } else { 0 }];
-    let mut codes = vec![0u32; if lean { total_points } else { 0 }];
-    // The shared points, evaluated in parallel into their slots (no buffer of points to copy
-    // from), in runs whose normals are found at once (and encoded at once when lean).
-    let n = shared.jobs.len();
-    let (shared_positions, positions) = out.positions.split_at_mut(n);
-    {
+
+    /// Evaluates the shared points in parallel into their slots (no buffer of points to copy
+    /// from), in runs whose normals are found at once: their positions, and their normals and
+    /// parameters (non-lean: `codes` empty) or their normals' octahedral codes (lean:
+    /// `normals` and `params` empty).
+    fn eval_shared(
+        &self,
+        positions: &mut [[f32; 3]],
+        mut normals: &mut [[f32; 3]],
+        mut params: &mut [FaceCoord],
+        mut codes: &mut [u32],
+    ) -> Result<()> {
         const RUN: usize = 256;
-        let mut runs = Vec::with_capacity(n.div_ceil(RUN));
-        let mut normals = out.normals.get_mut(..n).unwrap_or_default();
-        let mut params = out.params.get_mut(..n).unwrap_or_default();
-        let mut point_codes = codes.get_mut(..n).unwrap_or_default();
-        let mut rest = &mut shared_positions[..];
-        for jobs in shared.jobs.chunks(RUN) {
+        let (table, lean) = (self.ctx.table, self.ctx.lean);
+        let displacer = self.ctx.displace;
+        let jobs = &self.ctx.shared.jobs;
+        let mut runs = Vec::with_capacity(jobs.len().div_ceil(RUN));
+        let mut rest = positions;
+        for jobs in jobs.chunks(RUN) {
             let len = jobs.len();
             let (nl, cl) = if lean { (0, len) } else { (len, 0) };
             runs.push((
@@ -698,7 +650,7 @@ fn dice_with(
                 split_off(&mut rest, len),
                 split_off(&mut normals, nl),
                 split_off(&mut params, nl),
-                split_off(&mut point_codes, cl),
+                split_off(&mut codes, cl),
             ));
         }
         runs.into_par_iter().try_for_each_init(
@@ -726,7 +678,7 @@ fn dice_with(
                 if displacer.is_some() {
                     for i in 0..jobs.len() {
                         let FaceCoord { face, k, u, v } = at(i);
-                        put(i, eval_point(table, displacer.as_ref(), face, k, u, v)?);
+                        put(i, eval_point(table, displacer, face, k, u, v)?);
                     }
                 } else {
                     // A domain's points in a row (an edge's) share their leaves' parts.
@@ -749,17 +701,17 @@ fn dice_with(
                 }
                 Ok::<(), Error>(())
             },
-        )?;
+        )
     }
-    let ctx = DomainCtx {
-        shared_positions,
-        ..ctx
-    };
-    // The grid regions' records, in domain order (sums only).
-    let (mut base, mut first_triangle, mut first_frame) = (n as u32, 0u32, 0u32);
-    for (&(f, k), z) in domains.iter().zip(&sizes) {
-        if let Some(g) = z.grid {
-            out.grids.push(GridRegion {
+
+    /// Each domain's first point and first triangle, and its grid region if it has one, in
+    /// domain order (sums only).
+    fn layout(&self) -> Vec<(u32, u32, Option<GridRegion>)> {
+        let table = self.ctx.table;
+        let (mut base, mut first_triangle, mut first_frame) = (self.num_shared() as u32, 0, 0);
+        let mut out = Vec::with_capacity(self.domains.len());
+        for (&(f, k), z) in self.domains.iter().zip(&self.sizes) {
+            let region = z.grid.map(|g| GridRegion {
                 first_triangle,
                 face: f,
                 k,
@@ -768,61 +720,83 @@ fn dice_with(
                 frame: first_frame,
                 interior: base + z.copies as u32,
             });
+            out.push((base, first_triangle, region));
+            base += z.points as u32;
+            first_triangle += z.triangles as u32;
+            first_frame += z.frame as u32;
         }
-        base += z.points as u32;
-        first_triangle += z.triangles as u32;
-        first_frame += z.frame as u32;
+        out
     }
-    // Each chunk of domains' outputs split off here, in order; each domain's own within its
-    // chunk's worker (the slices of every domain made up front took a 316² grid 10 ms and
-    // 3,500 page faults, serially).
-    const CHUNK: usize = 64;
-    let mut rest = DomainOut {
-        slices: DomainSlices {
+
+    /// Total points (shared ones included) and triangles; an error past 2^31 points.
+    fn totals(&self) -> Result<(usize, usize)> {
+        let points = self.num_shared() + self.sizes.iter().map(|z| z.points).sum::<usize>();
+        let triangles = self.sizes.iter().map(|z| z.triangles).sum();
+        if u32::try_from(points).is_err() || points as u64 >= LOCAL as u64 {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "diced mesh exceeds 2^31 vertices",
+            ));
+        }
+        Ok((points, triangles))
+    }
+
+    /// The diced mesh ([`dice`]).
+    fn mesh(&self) -> Result<DicedMesh> {
+        let (total_points, total_tris) = self.totals()?;
+        let sizes = &self.sizes;
+        let mut out = DicedMesh {
+            positions: vec![[0.0; 3]; total_points],
+            normals: vec![[0.0; 3]; total_points],
+            // Zeroed allocations (every page is first touched by the domain that writes it,
+            // in parallel; `vec![x; n]` of a struct writes every element here, sequentially).
+            params: bytemuck::zeroed_vec(total_points),
+            triangles: vec![[0; 3]; total_tris],
+            tri_info: bytemuck::zeroed_vec(total_tris),
+            grids: Vec::new(),
+            grid_frames: vec![0; sizes.iter().map(|z| z.frame).sum()],
+        };
+        let n = self.num_shared();
+        let (shared_positions, positions) = out.positions.split_at_mut(n);
+        let (shared_normals, normals) = out.normals.split_at_mut(n);
+        let (shared_params, params) = out.params.split_at_mut(n);
+        self.eval_shared(shared_positions, shared_normals, shared_params, &mut [])?;
+        out.grids = self.layout().into_iter().filter_map(|l| l.2).collect();
+        let ctx = DomainCtx {
+            shared_positions,
+            ..self.ctx
+        };
+        let mut rest = DomainSlices {
             base: n as u32,
             positions,
-            normals: out.normals.get_mut(n..).unwrap_or_default(),
-            params: out.params.get_mut(n..).unwrap_or_default(),
+            normals,
+            params,
             triangles: &mut out.triangles[..],
             tri_info: &mut out.tri_info[..],
-            levels: &mut levels[..],
+            levels: &mut [],
             frame: &mut out.grid_frames[..],
-        },
-        codes: codes.get_mut(n..).unwrap_or_default(),
-    };
-    let mut chunks = Vec::with_capacity(domains.len().div_ceil(CHUNK));
-    for (ds, zs) in domains.chunks(CHUNK).zip(sizes.chunks(CHUNK)) {
-        let total = zs.iter().fold(DomainSize::default(), |a, z| DomainSize {
-            points: a.points + z.points,
-            triangles: a.triangles + z.triangles,
-            frame: a.frame + z.frame,
-            ..a
-        });
-        chunks.push((ds, zs, rest.split_off(&total, lean)));
-    }
-    chunks.into_par_iter().try_for_each_init(
-        || (Scratch::default(), Vec::new()),
-        |(scratch, normals), (ds, zs, mut chunk)| {
-            for (&(f, k), z) in ds.iter().zip(zs) {
-                let DomainOut { slices, codes } = chunk.split_off(z, lean);
-                if !lean {
-                    ctx.domain(f as usize, k as usize, scratch, slices)?;
-                    continue;
+        };
+        let mut chunks = Vec::with_capacity(self.domains.len().div_ceil(CHUNK));
+        for (ds, zs) in self.domains.chunks(CHUNK).zip(sizes.chunks(CHUNK)) {
+            let total = zs.iter().fold(DomainSize::default(), |a, z| DomainSize {
+                points: a.points + z.points,
+                triangles: a.triangles + z.triangles,
+                frame: a.frame + z.frame,
+                ..a
+            });
+            chunks.push((ds, zs, rest.split_off(&total)));
+        }
+        chunks.into_par_iter().try_for_each_init(
+            Scratch::default,
+            |scratch, (ds, zs, mut chunk)| {
+                for (&(f, k), z) in ds.iter().zip(zs) {
+                    ctx.domain(f as usize, k as usize, scratch, chunk.split_off(z))?;
                 }
-                // Lean: the normals in a buffer of the worker's, then encoded at once.
-                normals.clear();
-                normals.resize(codes.len(), [0.0; 3]);
-                let slices = DomainSlices {
-                    normals: &mut normals[..],
-                    ..slices
-                };
-                ctx.domain(f as usize, k as usize, scratch, slices)?;
-                oct_encode_all(normals, codes);
-            }
-            Ok::<(), Error>(())
-        },
-    )?;
-    Ok((out, levels, codes))
+                Ok::<(), Error>(())
+            },
+        )?;
+        Ok(out)
+    }
 }
 
 /// Flag of a domain-local vertex index in a domain's triangles before they are stored.
@@ -843,41 +817,6 @@ struct DomainSize {
     frame: usize,
 }
 
-/// Where a run of domains stores its points and triangles, and (lean dicing) their normals'
-/// codes.
-struct DomainOut<'a> {
-    slices: DomainSlices<'a>,
-    codes: &'a mut [u32],
-}
-
-impl<'a> DomainOut<'a> {
-    /// The outputs of the first domains, of `z.points` points, `z.triangles` triangles and
-    /// `z.frame` frame entries in all; `self` keeps the rest.
-    fn split_off(&mut self, z: &DomainSize, lean: bool) -> DomainOut<'a> {
-        let s = &mut self.slices;
-        let (own, coded, leveled) = if lean {
-            (0, z.points, z.triangles)
-        } else {
-            (z.points, 0, 0)
-        };
-        let head = DomainOut {
-            slices: DomainSlices {
-                base: s.base,
-                positions: split_off(&mut s.positions, z.points),
-                normals: split_off(&mut s.normals, own),
-                params: split_off(&mut s.params, own),
-                triangles: split_off(&mut s.triangles, z.triangles),
-                tri_info: split_off(&mut s.tri_info, z.triangles),
-                levels: split_off(&mut s.levels, leveled),
-                frame: split_off(&mut s.frame, z.frame),
-            },
-            codes: split_off(&mut self.codes, coded),
-        };
-        s.base += z.points as u32;
-        head
-    }
-}
-
 /// Where a domain stores its points and triangles in the diced mesh.
 struct DomainSlices<'a> {
     /// Index of its first point.
@@ -893,7 +832,24 @@ struct DomainSlices<'a> {
     frame: &'a mut [u32],
 }
 
-impl DomainSlices<'_> {
+impl<'a> DomainSlices<'a> {
+    /// The slices of the first domains, of `z.points` points, `z.triangles` triangles and
+    /// `z.frame` frame entries in all (a diced mesh's: no levels apart); `self` keeps the rest.
+    fn split_off(&mut self, z: &DomainSize) -> DomainSlices<'a> {
+        let head = DomainSlices {
+            base: self.base,
+            positions: split_off(&mut self.positions, z.points),
+            normals: split_off(&mut self.normals, z.points),
+            params: split_off(&mut self.params, z.points),
+            triangles: split_off(&mut self.triangles, z.triangles),
+            tri_info: split_off(&mut self.tri_info, z.triangles),
+            levels: &mut [],
+            frame: split_off(&mut self.frame, z.frame),
+        };
+        self.base += z.points as u32;
+        head
+    }
+
     /// Stores the domain's point `i` (its parameters too, unless dicing is lean).
     fn put(&mut self, i: usize, q: Point) {
         self.positions[i] = q.p;
@@ -943,6 +899,7 @@ impl LatticeScratch {
     }
 }
 
+#[derive(Clone, Copy)]
 struct DomainCtx<'a> {
     table: &'a PatchTable,
     level: &'a Level,
@@ -954,7 +911,7 @@ struct DomainCtx<'a> {
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
     displace: Option<&'a DisplacedSurface<'a>>,
-    /// Dicing for [`LeanDiced`]: no per-point parameters, and of grid triangles neither
+    /// Dicing for the grid core ([`dice_each`]): no per-point parameters, and of grid triangles neither
     /// corners nor records (only their levels, apart, where the domain has several).
     lean: bool,
 }

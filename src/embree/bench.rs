@@ -15,7 +15,7 @@ use super::subdiv::{check_rate, subdivision_scene_noise};
 use super::triangles::triangle_scene;
 use super::{Device, Scene, SceneOptions};
 use crate::bvh::{MeshBvh, Ray, Ray64};
-use crate::dice::{dice, dice_lean, DiceOptions, DiceRate, Displacement};
+use crate::dice::{dice, DiceOptions, DiceRate, Displacement};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact::ExactTracer;
 use crate::grid::GridMesh;
@@ -482,8 +482,8 @@ fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
 }
 
 /// limitray's two diced structures, and the seconds of each build part per repetition:
-/// patch table, lean dicing, grid core (the grid core's build), full dicing, triangle BVH
-/// (the triangle BVH's).
+/// patch table, dicing into the grid core's blocks, the grid core's strips and top level (the
+/// grid core's build, [`GridMesh::dice`]), full dicing, triangle BVH (the triangle BVH's).
 struct Limitray {
     grid: GridMesh,
     tris: MeshBvh,
@@ -512,10 +512,7 @@ fn build_limitray(
         let t0 = Instant::now();
         let table = embree_table(mesh)?;
         let t1 = Instant::now();
-        let lean = dice_lean(&table, mesh, &options)?;
-        let t2 = Instant::now();
-        let grid = GridMesh::build_lean(&lean)?;
-        drop(lean);
+        let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options)?;
         let t3 = Instant::now();
         // The triangle BVH needs the full diced mesh (every triangle's record).
         let diced = dice(&table, mesh, &options)?;

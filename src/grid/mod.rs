@@ -22,6 +22,7 @@
 
 mod binned;
 pub mod block;
+mod build;
 pub mod collapse;
 pub mod node;
 pub mod top;
@@ -30,18 +31,15 @@ pub mod window;
 use crate::bvh::mesh::Corners;
 use crate::bvh::ray::{Hit, Ray};
 use crate::bvh::triangle::{intersect_prepared, PreparedRay};
-use crate::dice::{DicedMesh, GridRegion, LeanDiced};
-use crate::error::{Error, ErrorKind, Result};
-use crate::oct::{oct_decode3, oct_encode_all};
-use crate::threads::split_off;
-use block::{plane_boxes, slot, Block, Slot, BLOCK, LEVEL_UNIFORM};
+use crate::oct::oct_decode3;
+use block::{slot, Block, Slot};
 use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
 use top::Top;
 use window::{lane_mask, Rows};
 
 /// A triangle outside the grids, with everything its hits need.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Zeroable)]
 pub struct Loose {
     /// Corners.
     pub p: [[f32; 3]; 3],
@@ -144,375 +142,7 @@ struct Best {
     b2: f32,
 }
 
-/// Where a planned block lies: its region (index in [`DicedMesh::grids`]) and where it
-/// starts in the region's grid (its header is apart, in [`GridMesh::blocks`]).
-#[derive(Clone, Copy, bytemuck::Zeroable)]
-struct Planned {
-    region: u32,
-    origin: [u32; 2],
-}
-
-/// Splits `n` quads into runs of at most [`BLOCK`], as even as possible, even lengths first:
-/// `(start, length)` of each, in order (nothing allocated).
-fn runs(n: usize) -> impl Iterator<Item = (usize, usize)> + Clone {
-    let count = n.div_ceil(BLOCK);
-    let mut start = 0;
-    (0..count).map(move |i| {
-        let left = n - start;
-        let parts = count - i;
-        let mut len = left.div_ceil(parts);
-        if len % 2 == 1 && len < left && len < BLOCK {
-            len += 1;
-        }
-        let run = (start, len.min(left));
-        start += run.1;
-        run
-    })
-}
-
-/// How many blocks [`plan_region`] makes of region `g`.
-fn blocks_of(g: &GridRegion) -> usize {
-    let [qc, qr] = g.part.quads.map(|x| x as usize);
-    qc.div_ceil(BLOCK) * qr.div_ceil(BLOCK)
-}
-
-/// Writes the blocks of region `region` (`g`) to the fronts of `out` and `headers`: where
-/// each lies, and its header without offsets (nothing is read from the diced mesh). Returns
-/// how many ([`blocks_of`]).
-fn plan_region(region: usize, g: &GridRegion, out: &mut [Planned], headers: &mut [Block]) -> usize {
-    let [qc, qr] = g.part.quads.map(|x| x as usize);
-    let mut made = 0;
-    for (y0, rows) in runs(qr) {
-        for (x0, cols) in runs(qc) {
-            headers[made] = Block {
-                tri0: g.first_triangle + 2 * (y0 * qc + x0) as u32,
-                tri_stride: 2 * qc as u32,
-                face: g.face,
-                k: g.k,
-                ij: [g.part.origin[0] + x0 as u32, g.part.origin[1] + y0 as u32],
-                n: g.part.n,
-                cols: cols as u8,
-                rows: rows as u8,
-                // A one-patch domain's level, once for the block.
-                level: g.level.map_or(0, |l| LEVEL_UNIFORM | l as u32),
-                ..Block::default()
-            };
-            out[made] = Planned {
-                region: region as u32,
-                origin: [x0 as u32, y0 as u32],
-            };
-            made += 1;
-        }
-    }
-    made
-}
-
-/// Space in [`GridMesh`]'s arrays: coordinates, box nodes and levels.
-#[derive(Clone, Copy, Default)]
-struct Extent {
-    coords: usize,
-    boxes: usize,
-    levels: usize,
-}
-
-impl Extent {
-    /// What `h` takes.
-    fn of(h: &Block) -> Extent {
-        Extent {
-            coords: 3 * h.num_vertices(),
-            boxes: h.num_boxes(),
-            levels: h.num_levels(),
-        }
-    }
-
-    fn add(self, b: Extent) -> Extent {
-        Extent {
-            coords: self.coords + b.coords,
-            boxes: self.boxes + b.boxes,
-            levels: self.levels + b.levels,
-        }
-    }
-
-    /// Sets `h`'s offsets to `self` plus those it has.
-    fn offset(self, h: &mut Block) {
-        h.vert += self.coords as u32;
-        h.boxes += self.boxes as u32;
-        if h.level & LEVEL_UNIFORM == 0 {
-            h.level += self.levels as u32;
-        }
-    }
-}
-
-/// The error of a diced mesh with more `what` (`count` of them) than the grid core addresses
-/// (`most`).
-fn too_many(count: usize, what: &str, most: &str) -> Error {
-    Error::new(
-        ErrorKind::Usage,
-        format!(
-            "the diced mesh has {count} {what}: more than the grid core addresses ({most}); \
-             lower the dicing rate or split the mesh"
-        ),
-    )
-}
-
-/// Where one block's data goes: its slices of [`GridMesh::coords`], `normals`, `boxes` and
-/// `levels`.
-struct BlockSlices<'a> {
-    coords: &'a mut [f32],
-    normals: &'a mut [u32],
-    boxes: &'a mut [Box4],
-    levels: &'a mut [u8],
-}
-
-/// Stores block `p` of `d` into `out`; returns its root node.
-fn fill_block(
-    d: &DicedMesh,
-    levels: Option<&[u8]>,
-    codes: &[u32],
-    p: Planned,
-    h: &Block,
-    out: BlockSlices,
-) -> Box4 {
-    let g = &d.grids[p.region as usize];
-    let (cols, rows) = (h.cols as usize, h.rows as usize);
-    let [x0, y0] = p.origin.map(|x| x as usize);
-    let mut row = [0u32; BLOCK + 1];
-    let row = &mut row[..=cols];
-    for y in 0..=rows {
-        g.row_vertices(&d.grid_frames, x0 as u32, (y0 + y) as u32, row);
-        for (x, &v) in row.iter().enumerate() {
-            let q = d.positions[v as usize];
-            for a in 0..3 {
-                out.coords[(3 * y + a) * (cols + 1) + x] = q[a];
-            }
-            out.normals[y * (cols + 1) + x] = codes[v as usize];
-        }
-    }
-    let root = plane_boxes(h, out.coords, out.boxes);
-    match g.level {
-        // One patch: one level, in the header (the triangles' records are not read).
-        Some(_) => debug_assert!(out.levels.is_empty()),
-        None => {
-            for y in 0..rows {
-                for x in 0..cols {
-                    for k in 0..2 {
-                        let t = h.triangle(x, y, k) as usize;
-                        out.levels[2 * (y * cols + x) + k] = match levels {
-                            Some(l) => l[t],
-                            None => d.tri_info[t].level,
-                        };
-                    }
-                }
-            }
-        }
-    }
-    root
-}
-
 impl GridMesh {
-    /// Builds the grid mesh of `d`; the diced mesh is not kept. Everything is stored region
-    /// by region, as the blocks were planned: block headers, vertices, normals, boxes and
-    /// levels, then the loose triangles in strips in id order. Fails when the
-    /// mesh needs more than 2^24 blocks or 2^31 loose triangles (see [`LEAF_LOOSE`]).
-    pub fn build(d: &DicedMesh) -> Result<GridMesh> {
-        Self::build_from(d, None, None)
-    }
-
-    /// [`Self::build`] from a lean dicing ([`crate::dice::dice_lean`]): the same grid mesh,
-    /// from less memory.
-    pub fn build_lean(d: &LeanDiced) -> Result<GridMesh> {
-        Self::build_from(&d.mesh, Some(&d.levels), Some(&d.codes))
-    }
-
-    /// [`Self::build`], reading of `d` only what a [`LeanDiced`] holds: positions, grid
-    /// regions and their frames, and the corners and records of loose triangles; the levels of
-    /// grid triangles in regions without a [`GridRegion::level`] from `tri_levels` when given
-    /// (a lean dicing's), else from their records; the normals' octahedral codes from
-    /// `normal_codes` when given (a lean dicing's), else encoded from `d`'s normals.
-    fn build_from(
-        d: &DicedMesh,
-        tri_levels: Option<&[u8]>,
-        normal_codes: Option<&[u32]>,
-    ) -> Result<GridMesh> {
-        // Plan the blocks in runs of regions of about CHUNK blocks, in parallel (headers with
-        // offsets within their run, and each run's extent), then store each in place, in
-        // parallel, its offsets made global first, and take its bounds from its root box; the
-        // top level is built over those bounds.
-        const CHUNK: usize = 128;
-        let mut chunks: Vec<(std::ops::Range<usize>, usize)> = Vec::new();
-        let (mut start, mut count) = (0, 0);
-        for (i, g) in d.grids.iter().enumerate() {
-            count += blocks_of(g);
-            if count >= CHUNK || i + 1 == d.grids.len() {
-                chunks.push((start..i + 1, count));
-                (start, count) = (i + 1, 0);
-            }
-        }
-        let nplanned = chunks.iter().map(|c| c.1).sum::<usize>();
-        if nplanned >= 1 << 24 {
-            return Err(too_many(nplanned, "grid blocks", "2^24"));
-        }
-        // Zeroed: the pages are first touched by the run that writes them, in parallel.
-        let mut plans: Vec<Planned> = bytemuck::zeroed_vec(nplanned);
-        let mut headers: Vec<Block> = bytemuck::zeroed_vec(nplanned);
-        let mut runs = Vec::with_capacity(chunks.len());
-        {
-            let (mut p, mut h) = (&mut plans[..], &mut headers[..]);
-            for (regions, n) in &chunks {
-                runs.push((
-                    regions.clone(),
-                    split_off(&mut p, *n),
-                    split_off(&mut h, *n),
-                ));
-            }
-        }
-        let extents: Vec<Extent> = runs
-            .into_par_iter()
-            .map(|(regions, plans, headers)| {
-                let mut at = 0;
-                for i in regions {
-                    at += plan_region(i, &d.grids[i], &mut plans[at..], &mut headers[at..]);
-                }
-                headers.iter_mut().fold(Extent::default(), |e, h| {
-                    e.offset(h);
-                    e.add(Extent::of(h))
-                })
-            })
-            .collect();
-        let total = extents.iter().fold(Extent::default(), |a, &e| a.add(e));
-        let (ncoords, nboxes, nlevels) = (total.coords, total.boxes, total.levels);
-        // Each vertex's octahedral normal, encoded once (a block border's vertices are held by
-        // two or four blocks, a loose triangle's corners by several triangles).
-        let encoded;
-        let codes = match normal_codes {
-            Some(codes) => codes,
-            None => {
-                let mut codes = vec![0u32; d.normals.len()];
-                codes
-                    .par_chunks_mut(4096)
-                    .zip(d.normals.par_chunks(4096))
-                    .for_each(|(c, n)| oct_encode_all(n, c));
-                encoded = codes;
-                &encoded[..]
-            }
-        };
-        let mut m = GridMesh {
-            triangles: d.triangles.len(),
-            bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
-            ..GridMesh::default()
-        };
-        // Window rows are read four values at a time: the last plane's last row reads past it
-        // into four zeros.
-        m.coords = vec![0.0; ncoords + 4];
-        m.normals = vec![0; ncoords / 3];
-        // Zeroed, not empty boxes: every block overwrites all of its slice (and a zeroed
-        // allocation's pages are first touched by the block that writes them, in parallel).
-        m.boxes = bytemuck::zeroed_vec(nboxes);
-        m.levels = vec![0; nlevels];
-        {
-            let mut jobs = Vec::with_capacity(chunks.len());
-            let (mut coords, mut normals) = (&mut m.coords[..ncoords], &mut m.normals[..]);
-            let (mut boxes, mut levels) = (&mut m.boxes[..], &mut m.levels[..]);
-            let (mut p, mut h) = (&plans[..], &mut headers[..]);
-            let mut base = Extent::default();
-            for (&(_, n), &e) in chunks.iter().zip(&extents) {
-                let out = BlockSlices {
-                    coords: split_off(&mut coords, e.coords),
-                    normals: split_off(&mut normals, e.coords / 3),
-                    boxes: split_off(&mut boxes, e.boxes),
-                    levels: split_off(&mut levels, e.levels),
-                };
-                let (mine, rest) = p.split_at(n);
-                p = rest;
-                jobs.push((base, mine, split_off(&mut h, n), out));
-                base = base.add(e);
-            }
-            jobs.into_par_iter()
-                .for_each(|(base, plans, headers, mut out)| {
-                    for (&p, h) in plans.iter().zip(headers) {
-                        base.offset(h);
-                        let e = Extent::of(h);
-                        let mine = BlockSlices {
-                            coords: split_off(&mut out.coords, e.coords),
-                            normals: split_off(&mut out.normals, e.coords / 3),
-                            boxes: split_off(&mut out.boxes, e.boxes),
-                            levels: split_off(&mut out.levels, e.levels),
-                        };
-                        h.root = fill_block(d, tri_levels, codes, p, h, mine);
-                    }
-                });
-        }
-        // Each block's bounds: the union of its root's children (absent ones are empty).
-        let mut prim_boxes: Vec<top::Bounds> = headers
-            .iter()
-            .map(|h| (0..4).fold(top::NONE, |b, c| top::union(b, h.root.child(c))))
-            .collect();
-        let mut loose = Vec::new();
-        // Strips: runs of at most STRIP loose triangles of one domain, in id order (a
-        // domain's zipper triangles are consecutive, side by side).
-        let mut strips: Vec<[u32; 2]> = Vec::new();
-        // The loose triangles: those between the grid regions (which are in id order).
-        let grid_runs = d.grids.iter().map(|g| {
-            let first = g.first_triangle as usize;
-            first..first + 2 * (g.part.quads[0] * g.part.quads[1]) as usize
-        });
-        let gaps = grid_runs
-            .clone()
-            .map(|r| r.start)
-            .chain([d.triangles.len()])
-            .zip(std::iter::once(0).chain(grid_runs.map(|r| r.end)))
-            .flat_map(|(end, start)| start..end);
-        for i in gaps {
-            let t = &d.triangles[i];
-            let info = &d.tri_info[i];
-            let p = t.map(|v| d.positions[v as usize]);
-            let same = loose.last().is_some_and(|l: &Loose| {
-                l.face == info.face && l.k == info.k && l.id + 1 == i as u32
-            });
-            match strips.last_mut() {
-                Some(s) if same && (s[1] as usize) < STRIP => s[1] += 1,
-                _ => {
-                    strips.push([loose.len() as u32, 1]);
-                    prim_boxes.push(top::NONE);
-                }
-            }
-            let b = prim_boxes.last_mut().expect("the strip's box");
-            *b = p.iter().fold(*b, |b, &q| top::union(b, [q, q]));
-            loose.push(Loose {
-                p,
-                n: t.map(|v| codes[v as usize]),
-                uv: info.uv,
-                id: i as u32,
-                face: info.face,
-                k: info.k,
-                level: info.level,
-            });
-        }
-        m.bounds = prim_boxes.iter().fold(m.bounds, |a, &b| top::union(a, b));
-        if loose.len() >= 1 << 31 {
-            return Err(too_many(loose.len(), "loose triangles", "2^31"));
-        }
-        if prim_boxes.is_empty() {
-            return Ok(m);
-        }
-        let bounds = prim_boxes;
-        let top = Top::build(&bounds);
-        // Block headers and strips stay in the order they were made (the mesh's), the order
-        // of the blocks' vertices: put in the top level's depth-first order instead, the
-        // headers cost the 316² grid 10 ms of gathering and the rays nothing (the same rays
-        // per second within 3%, BENCHMARKS.md, fourteenth step).
-        m.fetch = headers
-            .iter()
-            .map(|h| [h.vert, if h.two_level() { h.boxes } else { u32::MAX }])
-            .chain([[ncoords as u32, u32::MAX]])
-            .collect();
-        m.blocks = headers;
-        m.strips = strips;
-        m.loose = loose;
-        m.top = top;
-        Ok(m)
-    }
-
     /// Prefetches what visiting primitive `prim` reads first: a block's header and root, its
     /// quadrant nodes and its vertices; with `NORMALS`, its vertices' normals too, which a
     /// closest-hit query's hit record reads (unprefetched, the record's load of its corners'
@@ -855,6 +485,26 @@ impl GridMesh {
         }
     }
 
+    /// The corners of every triangle, by id (the diced mesh's order: quad `(x, y)` of a grid
+    /// region as `[a, b, c]` and `[a, c, d]` from its lower-left corner `a`).
+    pub fn triangle_corners(&self) -> Vec<[[f32; 3]; 3]> {
+        let mut out = vec![[[0.0; 3]; 3]; self.triangles];
+        for (bi, b) in self.blocks.iter().enumerate() {
+            for y in 0..b.rows as usize {
+                for x in 0..b.cols as usize {
+                    for h in 0..2 {
+                        let leaf = Found::Grid(bi as u32, x as u8, y as u8, h as u8).leaf();
+                        out[b.triangle(x, y, h) as usize] = self.corners(leaf);
+                    }
+                }
+            }
+        }
+        for l in &self.loose {
+            out[l.id as usize] = l.p;
+        }
+        out
+    }
+
     /// The `(u, v)` at the corners of the triangle at `leaf`, as its hits interpolate them.
     pub fn corner_uvs(&self, leaf: u32) -> [[f32; 2]; 3] {
         match Found::of(leaf) {
@@ -906,6 +556,8 @@ mod tests {
 
     #[test]
     fn runs_tile_and_stay_small() {
+        use block::BLOCK;
+        use build::runs;
         for n in 1..40 {
             let r: Vec<_> = runs(n).collect();
             assert_eq!(r.iter().map(|x| x.1).sum::<usize>(), n);
@@ -1001,7 +653,7 @@ mod tests {
     /// the boxes are as tight as `f32` boxes can be, and conservative.
     #[test]
     fn every_box_is_exactly_what_lies_below() {
-        use crate::dice::{dice_lean, DiceOptions, DiceRate};
+        use crate::dice::{dice, DiceOptions, DiceRate};
         use crate::mesh::generate;
         use crate::patch::{PatchOptions, PatchTable};
         let mut strips = false;
@@ -1019,13 +671,13 @@ mod tests {
                     max_rate: 64,
                     displace: None,
                 };
-                let d = dice_lean(&table, &mesh, &opts).unwrap();
-                let m = GridMesh::build_lean(&d).unwrap();
+                let d = dice(&table, &mesh, &opts).unwrap();
+                let m = GridMesh::dice(&table, &mesh, &opts).unwrap();
                 assert!(!m.blocks.is_empty());
                 let all = check_ref(&m, m.top.root);
                 assert_eq!(all, m.bounds, "rate {rate:?}");
                 let mut direct = EMPTY_BOX;
-                d.positions().iter().for_each(|&p| grow(&mut direct, p));
+                d.positions.iter().for_each(|&p| grow(&mut direct, p));
                 assert_eq!(all, direct, "rate {rate:?}");
                 strips |= !m.strips.is_empty();
             }

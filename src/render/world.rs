@@ -9,7 +9,7 @@ use super::material::Material;
 use super::scene::{Dicing, EnvDesc, MeshDesc, RenderSettings, SceneDesc};
 use super::texturing::{InstanceMaps, MaterialTextures};
 use crate::bvh::SceneBvh;
-use crate::dice::{dice_lean, DiceOptions, DiceRate, ScreenRate};
+use crate::dice::{DiceOptions, DiceRate, ScreenRate};
 use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridMesh;
 use crate::mesh::obj::read_obj;
@@ -28,9 +28,10 @@ pub struct BuildStats {
     pub load_s: f64,
     /// Building the patch tables.
     pub patch_s: f64,
-    /// Dicing.
+    /// Dicing, straight into each mesh's grid blocks and their top level
+    /// ([`GridMesh::dice`]).
     pub dice_s: f64,
-    /// Building the BVHs (per mesh and top level) and the light tables.
+    /// Building the scene's top level and the light tables.
     pub bvh_s: f64,
     /// Diced triangles in the scene.
     pub triangles: usize,
@@ -367,11 +368,12 @@ impl World {
             estimates.iter().map(|e| e.bytes_with_bvh()).sum(),
             "lower the dicing rates (the meshes' rate, max_rate or pixels_per_edge)",
         )?;
-        let diced = first_user
+        let job_grids: Vec<Arc<GridMesh>> = first_user
             .par_iter()
             .map(|&i| {
                 let m = &desc.meshes[i];
-                dice_lean(&tables[table_of[i]], &controls[file_of[i]], &options[i])
+                GridMesh::dice(&tables[table_of[i]], &controls[file_of[i]], &options[i])
+                    .map(Arc::new)
                     .map_err(|e| e.in_file(m.file.display().to_string()))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -379,23 +381,13 @@ impl World {
         stats.dice_s = t0.elapsed().as_secs_f64();
 
         let t0 = Instant::now();
-        // Emissive meshes' triangles, from the diced meshes before they are dropped.
-        let mut light_tris: Vec<Option<Vec<[[f32; 3]; 3]>>> = vec![None; diced.len()];
+        // Emissive meshes' triangles, in the diced mesh's order.
+        let mut light_tris: Vec<Option<Vec<[[f32; 3]; 3]>>> = vec![None; job_grids.len()];
         for (m, &job) in desc.meshes.iter().zip(&job_of) {
             if emitted(desc.materials[m.material].1).is_some() && light_tris[job].is_none() {
-                let d = &diced[job];
-                light_tris[job] = Some(
-                    d.triangles()
-                        .into_iter()
-                        .map(|t| t.map(|i| d.positions()[i as usize]))
-                        .collect(),
-                );
+                light_tris[job] = Some(job_grids[job].triangle_corners());
             }
         }
-        let job_grids: Vec<Arc<GridMesh>> = diced
-            .into_par_iter()
-            .map(|d| GridMesh::build_lean(&d).map(Arc::new))
-            .collect::<Result<Vec<_>>>()?;
         let grids: Vec<Arc<GridMesh>> = job_of.iter().map(|&j| job_grids[j].clone()).collect();
         let mut scene = SceneBvh::new();
         let mut transforms = Vec::new();
