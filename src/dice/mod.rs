@@ -1141,45 +1141,97 @@ impl DomainCtx<'_> {
         let whole = self.table.domain_level(f, k);
         let mut leaf: Option<([f64; 4], u8)> = None;
         // Lean dicing writes of its grid triangles neither corners (the grid build reads the
-        // frame) nor records, only the level, apart, and not even that where the domain is one
-        // patch (its grid region carries the level).
+        // frame) nor records, only the levels, apart, a leaf's run of quads at a time, and not
+        // even those where the domain is one patch (its grid region carries the level).
         let unrecorded = match (self.lean, pat.grid) {
-            (true, Some(g)) => 2 * (g.quads[0] * g.quads[1]) as usize,
+            (true, Some(g)) => {
+                if whole.is_none() {
+                    self.grid_levels(f, k, pat, g, &mut leaf, out.levels)?;
+                }
+                2 * (g.quads[0] * g.quads[1]) as usize
+            }
             _ => 0,
         };
-        for (ti, t) in pat.triangles.iter().enumerate() {
-            if ti >= unrecorded {
-                out.triangles[ti] = t.map(|i| global(map[i as usize]));
-            } else if whole.is_some() {
-                continue;
-            }
+        for (ti, t) in pat.triangles.iter().enumerate().skip(unrecorded) {
+            out.triangles[ti] = t.map(|i| global(map[i as usize]));
             let level = match whole {
                 Some(l) => l,
-                None => {
-                    let [cu, cv] = pat.tri_centre[ti];
-                    match leaf {
-                        Some(([u0, v0, u1, v1], l)) if u0 < cu && cu < u1 && v0 < cv && cv < v1 => {
-                            l
-                        }
-                        _ => {
-                            let at = FaceCoord::new(f as u32, k as u32, cu, cv);
-                            let (l, extent) = self.table.level_and_extent(at)?;
-                            leaf = extent.map(|e| (e, l));
-                            l
-                        }
-                    }
-                }
+                None => self.centre_level(f, k, pat.tri_centre[ti], &mut leaf)?,
             };
-            if ti < unrecorded {
-                out.levels[ti] = level;
-                continue;
-            }
             out.tri_info[ti] = TriInfo {
                 face: f as u32,
                 k: k as u32,
                 level,
                 uv: pat.tri_uv[ti],
             };
+        }
+        Ok(())
+    }
+
+    /// The level at triangle centre `[cu, cv]` of domain `(f, k)`: the last leaf's (`leaf`,
+    /// its bounds and level) when the centre lies strictly inside it, else looked up
+    /// ([`PatchTable::level_and_extent`]), the leaf kept.
+    #[inline(always)]
+    fn centre_level(
+        &self,
+        f: usize,
+        k: usize,
+        [cu, cv]: [f64; 2],
+        leaf: &mut Option<([f64; 4], u8)>,
+    ) -> Result<u8> {
+        match *leaf {
+            Some(([u0, v0, u1, v1], l)) if u0 < cu && cu < u1 && v0 < cv && cv < v1 => Ok(l),
+            _ => {
+                let at = FaceCoord::new(f as u32, k as u32, cu, cv);
+                let (l, extent) = self.table.level_and_extent(at)?;
+                *leaf = extent.map(|e| (e, l));
+                Ok(l)
+            }
+        }
+    }
+
+    /// The levels of the grid triangles of domain `(f, k)` (grid `g` of pattern `pat`) into
+    /// `levels`, each [`Self::centre_level`]'s: a quad whose box lies in the closed bounds of
+    /// the leaf found for its first triangle has its centres strictly inside (at least a third
+    /// of a quad from its sides, far beyond the rounding of the bounds), so that leaf's level
+    /// is given at once to it and to the quads after it in its row that lie in the leaf too.
+    fn grid_levels(
+        &self,
+        f: usize,
+        k: usize,
+        pat: &Pattern,
+        g: GridPart,
+        leaf: &mut Option<([f64; 4], u8)>,
+        levels: &mut [u8],
+    ) -> Result<()> {
+        let [qc, qr] = g.quads.map(|q| q as usize);
+        let [nu, nv] = g.n.map(f64::from);
+        let [ou, ov] = g.origin.map(|o| o as usize);
+        let u = |x: usize| (ou + x) as f64 / nu;
+        for y in 0..qr {
+            let (vlo, vhi) = ((ov + y) as f64 / nv, (ov + y + 1) as f64 / nv);
+            let mut x = 0;
+            while x < qc {
+                let ti = 2 * (y * qc + x);
+                let l = self.centre_level(f, k, pat.tri_centre[ti], leaf)?;
+                match *leaf {
+                    Some(([u0, v0, u1, v1], _))
+                        if v0 <= vlo && vhi <= v1 && u0 <= u(x) && u(x + 1) <= u1 =>
+                    {
+                        let mut end = x + 1;
+                        while end < qc && u(end + 1) <= u1 {
+                            end += 1;
+                        }
+                        levels[ti..2 * (y * qc + end)].fill(l);
+                        x = end;
+                    }
+                    _ => {
+                        levels[ti] = l;
+                        levels[ti + 1] = self.centre_level(f, k, pat.tri_centre[ti + 1], leaf)?;
+                        x += 1;
+                    }
+                }
+            }
         }
         Ok(())
     }
