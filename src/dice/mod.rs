@@ -23,6 +23,7 @@ pub mod estimate;
 mod normals;
 mod pattern;
 mod rates;
+mod shared;
 
 pub use displace::Displacement;
 pub use each::{dice_each, DiceLayout, DomainPlan, DomainView};
@@ -44,6 +45,7 @@ use crate::vec3::{norm, sub};
 use normals::unit_normal;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap as HashMap;
+use shared::{Run, Shared};
 
 /// Options of [`dice`].
 #[derive(Clone, Debug, PartialEq)]
@@ -406,21 +408,6 @@ pub fn face_edge_param(n: usize, m: usize, t: f64) -> (u32, f64, f64) {
     }
 }
 
-/// Shared vertices and the layout of the diced mesh's first part.
-struct Shared {
-    /// Each point's domain and parameters (its owner: seam points of other domains are
-    /// copies), in order; the points are evaluated into the diced mesh's first vertices.
-    jobs: Vec<(u32, u32, f64, f64)>,
-    /// Index of each base vertex's point (`u32::MAX` if no live face uses it).
-    vertex: Vec<u32>,
-    /// First index of each edge's interior samples (`r_e - 1` of them, from `edge_verts[0]`).
-    edge_first: Vec<u32>,
-    /// Index of each n-gon's centre point.
-    centre: Vec<u32>,
-    /// First index of each n-gon spoke's interior samples, per face-vertex slot.
-    spoke_first: Vec<u32>,
-}
-
 /// Upper bounds on the size of [`dice`]'s result, from the edge rates alone.
 pub fn estimate_size(
     table: &PatchTable,
@@ -499,87 +486,8 @@ fn prepare<R>(
         })
         .collect();
 
-    // --- Shared points: evaluate in parallel, then lay out. -------------------------------
-    // At most a point per vertex, per edge's inner point and per n-gon's centre and spokes'
-    // inner points (reserved: grown by doubling, the list was copied and faulted in again).
-    let most = topo.num_vertices
-        + rates
-            .edge
-            .iter()
-            .map(|&r| r.saturating_sub(1) as usize)
-            .sum::<usize>()
-        + (0..topo.num_faces())
-            .filter(|&f| topo.face_size(f) != 4)
-            .map(|f| {
-                let base = topo.face_offsets[f] as usize;
-                let spokes = &rates.spoke[base..base + topo.face_size(f)];
-                1 + spokes.iter().map(|&s| s as usize).sum::<usize>()
-            })
-            .sum::<usize>();
-    let mut jobs: Vec<(u32, u32, f64, f64)> = Vec::with_capacity(most);
-    let mut vertex = vec![u32::MAX; topo.num_vertices];
-    for v in 0..topo.num_vertices {
-        let faces = topo.vertex_faces(v);
-        let corners = topo.vertex_face_corners(v);
-        if let Some(i) = (0..faces.len()).find(|&i| live(faces[i] as usize)) {
-            let f = faces[i] as usize;
-            let m = corners[i] as usize;
-            let (k, u, v2) = face_edge_param(topo.face_size(f), m, 0.0);
-            vertex[v] = jobs.len() as u32;
-            jobs.push((f as u32, k, u, v2));
-        }
-    }
-    let mut edge_first = vec![u32::MAX; topo.num_edges()];
-    for e in 0..topo.num_edges() {
-        let faces = topo.edge_face_list(e as u32);
-        let Some(&f) = faces.iter().find(|&&f| live(f as usize)) else {
-            continue;
-        };
-        let f = f as usize;
-        let n = topo.face_size(f);
-        let m = (0..n)
-            .find(|&m| topo.face_edge(f, m) == e as u32)
-            .expect("edge of its face");
-        let forward = topo.face_vertices(f)[m] == topo.edge_verts[e][0];
-        let r = rates.edge[e];
-        edge_first[e] = jobs.len() as u32;
-        for i in 1..r {
-            let t = if forward {
-                i as f64 / r as f64
-            } else {
-                (r - i) as f64 / r as f64
-            };
-            let (k, u, v) = face_edge_param(n, m, t);
-            jobs.push((f as u32, k, u, v));
-        }
-    }
-    let mut centre = vec![u32::MAX; topo.num_faces()];
-    let mut spoke_first = vec![u32::MAX; topo.face_verts.len()];
-    for f in 0..topo.num_faces() {
-        let n = topo.face_size(f);
-        if n == 4 || !live(f) {
-            continue;
-        }
-        centre[f] = jobs.len() as u32;
-        jobs.push((f as u32, 0, 1.0, 1.0));
-        let base = topo.face_offsets[f] as usize;
-        for k in 0..n {
-            let s = rates.spoke[base + k];
-            spoke_first[base + k] = jobs.len() as u32;
-            for i in 1..s {
-                jobs.push((f as u32, k as u32, 1.0, i as f64 / s as f64));
-            }
-        }
-    }
-    // The shared points are evaluated once the diced mesh is allocated, straight into its
-    // first vertices (below).
-    let shared = Shared {
-        jobs,
-        vertex,
-        edge_first,
-        centre,
-        spoke_first,
-    };
+    // --- Shared points: laid out (evaluated once the domains' sizes are known). ----------
+    let shared = Shared::new(level, &rates.edge, &rates.spoke);
 
     // --- Domains: stitch patterns, evaluate interiors, in parallel. -----------------------
     let domains: Vec<(u32, u32)> = (0..topo.num_faces())
@@ -622,7 +530,7 @@ fn prepare<R>(
 impl Prepared<'_> {
     /// Number of shared points (the diced mesh's first vertices).
     fn num_shared(&self) -> usize {
-        self.ctx.shared.jobs.len()
+        self.ctx.shared.len
     }
 
     /// Evaluates the shared points in parallel into their slots (no buffer of points to copy
@@ -636,27 +544,32 @@ impl Prepared<'_> {
         mut params: &mut [FaceCoord],
         mut codes: &mut [u32],
     ) -> Result<()> {
-        const RUN: usize = 256;
+        const GROUP: usize = 256;
         let (table, lean) = (self.ctx.table, self.ctx.lean);
         let displacer = self.ctx.displace;
-        let jobs = &self.ctx.shared.jobs;
-        let mut runs = Vec::with_capacity(jobs.len().div_ceil(RUN));
+        let groups = self.ctx.shared.groups(GROUP);
+        let mut jobs = Vec::with_capacity(groups.len());
         let mut rest = positions;
-        for jobs in jobs.chunks(RUN) {
-            let len = jobs.len();
+        for (runs, len) in groups {
             let (nl, cl) = if lean { (0, len) } else { (len, 0) };
-            runs.push((
-                jobs,
+            jobs.push((
+                runs,
                 split_off(&mut rest, len),
                 split_off(&mut normals, nl),
                 split_off(&mut params, nl),
                 split_off(&mut codes, cl),
             ));
         }
-        runs.into_par_iter().try_for_each_init(
-            || (LatticeScratch::default(), Vec::new()),
-            |(scratch, run_normals), (jobs, p, nrm, prm, cds)| {
-                // Lean: the run's normals gathered here, then encoded at once (`cds`).
+        jobs.into_par_iter().try_for_each_init(
+            || (LatticeScratch::default(), Vec::new(), Vec::new()),
+            |(scratch, run_normals, coords), (runs, p, nrm, prm, cds)| {
+                // The group's points' parameters, from their runs.
+                coords.clear();
+                coords.extend(
+                    runs.iter()
+                        .flat_map(|r: &Run| (0..r.len()).map(move |i| r.at(i))),
+                );
+                // Lean: the group's normals gathered here, then encoded at once (`cds`).
                 run_normals.clear();
                 run_normals.resize(cds.len(), [0.0; 3]);
                 let mut put = |i: usize, q: Point| {
@@ -671,10 +584,8 @@ impl Prepared<'_> {
                         *slot = q.param;
                     }
                 };
-                let at = |i: usize| {
-                    let (f, k, u, v) = jobs[i];
-                    FaceCoord::new(f, k, u, v)
-                };
+                let at = |i: usize| coords[i];
+                let jobs = &coords[..];
                 if displacer.is_some() {
                     for i in 0..jobs.len() {
                         let FaceCoord { face, k, u, v } = at(i);
@@ -1050,8 +961,10 @@ impl DomainCtx<'_> {
     /// Whether side point `sp` of domain `(f, k)` is a seam vertex owned by another domain
     /// (the domain stores a copy of its own).
     fn foreign_seam(&self, f: usize, k: usize, sp: SidePoint) -> bool {
-        let (face, owner_k, _, _) = self.shared.jobs[sp.index as usize];
-        sp.seam && (face as usize != f || owner_k as usize != k)
+        sp.seam && {
+            let owner = self.shared.at(sp.index);
+            owner.face as usize != f || owner.k as usize != k
+        }
     }
 
     /// What domain `(f, k)` adds to the diced mesh (nothing is evaluated).
