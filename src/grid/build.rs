@@ -169,14 +169,15 @@ where
     let [x0, y0] = origin.map(|x| x as usize);
     let mut row = [0u32; BLOCK + 1];
     let row = &mut row[..=cols];
-    for y in 0..=rows {
+    let w = cols + 1;
+    let planes = out.coords[..3 * w * (rows + 1)].chunks_exact_mut(3 * w);
+    for ((y, plane), codes) in planes.enumerate().zip(out.normals.chunks_exact_mut(w)) {
         s.g.row_vertices(s.frames, x0 as u32, (y0 + y) as u32, row);
-        for (x, &v) in row.iter().enumerate() {
+        let (xs, yz) = plane.split_at_mut(w);
+        let (ys, zs) = yz.split_at_mut(w);
+        for ((((&v, px), py), pz), c) in row.iter().zip(xs).zip(ys).zip(zs).zip(codes) {
             let (q, code) = (s.point)(v);
-            for a in 0..3 {
-                out.coords[(3 * y + a) * (cols + 1) + x] = q[a];
-            }
-            out.normals[y * (cols + 1) + x] = code;
+            (*px, *py, *pz, *c) = (q[0], q[1], q[2], code);
         }
     }
     let root = plane_boxes(h, out.coords, out.boxes);
