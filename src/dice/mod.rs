@@ -534,9 +534,9 @@ impl Prepared<'_> {
     }
 
     /// Evaluates the shared points in parallel into their slots (no buffer of points to copy
-    /// from), in runs whose normals are found at once: their positions, and their normals and
-    /// parameters (non-lean: `codes` empty) or their normals' octahedral codes (lean:
-    /// `normals` and `params` empty).
+    /// from), in groups of runs whose normals are found at once: their positions, and their
+    /// normals and parameters (non-lean: `codes` empty) or their normals' octahedral codes
+    /// (lean: `normals` and `params` empty).
     fn eval_shared(
         &self,
         positions: &mut [[f32; 3]],
@@ -562,7 +562,7 @@ impl Prepared<'_> {
         }
         jobs.into_par_iter().try_for_each_init(
             || (LatticeScratch::default(), Vec::new(), Vec::new()),
-            |(scratch, run_normals, coords), (runs, p, nrm, prm, cds)| {
+            |(scratch, group_normals, coords), (runs, p, nrm, prm, cds)| {
                 // The group's points' parameters, from their runs.
                 coords.clear();
                 coords.extend(
@@ -570,11 +570,11 @@ impl Prepared<'_> {
                         .flat_map(|r: &Run| (0..r.len()).map(move |i| r.at(i))),
                 );
                 // Lean: the group's normals gathered here, then encoded at once (`cds`).
-                run_normals.clear();
-                run_normals.resize(cds.len(), [0.0; 3]);
+                group_normals.clear();
+                group_normals.resize(cds.len(), [0.0; 3]);
                 let mut put = |i: usize, q: Point| {
                     p[i] = q.p;
-                    if let Some(slot) = run_normals.get_mut(i) {
+                    if let Some(slot) = group_normals.get_mut(i) {
                         *slot = q.n;
                     }
                     if let Some(slot) = nrm.get_mut(i) {
@@ -585,18 +585,15 @@ impl Prepared<'_> {
                     }
                 };
                 let at = |i: usize| coords[i];
-                let jobs = &coords[..];
                 if displacer.is_some() {
-                    for i in 0..jobs.len() {
-                        let FaceCoord { face, k, u, v } = at(i);
+                    for (i, &FaceCoord { face, k, u, v }) in coords.iter().enumerate() {
                         put(i, eval_point(table, displacer, face, k, u, v)?);
                     }
                 } else {
                     // A domain's points in a row (an edge's) share their leaves' parts.
                     scratch.points.clear();
                     let mut domain = None;
-                    for i in 0..jobs.len() {
-                        let at = at(i);
+                    for &at in coords.iter() {
                         if domain != Some((at.face, at.k)) {
                             domain = Some((at.face, at.k));
                             scratch.kept.clear();
@@ -608,7 +605,7 @@ impl Prepared<'_> {
                     scratch.finish(table, at, put)?;
                 }
                 if lean {
-                    oct_encode_all(run_normals, cds);
+                    oct_encode_all(group_normals, cds);
                 }
                 Ok::<(), Error>(())
             },
@@ -822,8 +819,9 @@ struct DomainCtx<'a> {
     sharp_edge: &'a [bool],
     sharp_vertex: &'a [bool],
     displace: Option<&'a DisplacedSurface<'a>>,
-    /// Dicing for the grid core ([`dice_each`]): no per-point parameters, and of grid triangles neither
-    /// corners nor records (only their levels, apart, where the domain has several).
+    /// Dicing for the grid core ([`dice_each`]): no per-point parameters, and of grid
+    /// triangles neither corners nor records (only their levels, apart, where the domain has
+    /// several).
     lean: bool,
 }
 
