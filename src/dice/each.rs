@@ -154,19 +154,19 @@ pub fn dice_each<C: Send>(
         let mut shared_codes = vec![0u32; n];
         p.eval_shared(&mut shared_positions, &mut [], &mut [], &mut shared_codes)?;
         let starts = p.layout();
-        let domains: Vec<DomainPlan> = starts
-            .iter()
-            .zip(&p.domains)
-            .zip(&p.sizes)
-            .map(
-                |((&(_, first_triangle, region), &(face, k)), z)| DomainPlan {
+        let domains: Vec<DomainPlan> = (0..starts.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                let ((_, first_triangle, region), (face, k)) = (starts[i], p.domains[i]);
+                DomainPlan {
                     face,
                     k,
                     first_triangle,
-                    triangles: z.triangles as u32,
+                    triangles: p.sizes[i].triangles as u32,
                     region: region.map(|g| GridRegion { frame: 0, ..g }),
-                },
-            )
+                }
+            })
             .collect();
         let count = domains.len();
         let layout = DiceLayout {

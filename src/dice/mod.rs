@@ -612,28 +612,41 @@ impl Prepared<'_> {
         )
     }
 
-    /// Each domain's first point and first triangle, and its grid region if it has one, in
-    /// domain order (sums only).
+    /// Each domain's first point, first triangle, and its grid region if it has one, in
+    /// domain order: the sums in one pass, the regions (each looks its domain's level up in
+    /// the table) in parallel.
     fn layout(&self) -> Vec<(u32, u32, Option<GridRegion>)> {
         let table = self.ctx.table;
-        let (mut base, mut first_triangle, mut first_frame) = (self.num_shared() as u32, 0, 0);
-        let mut out = Vec::with_capacity(self.domains.len());
-        for (&(f, k), z) in self.domains.iter().zip(&self.sizes) {
-            let region = z.grid.map(|g| GridRegion {
-                first_triangle,
-                face: f,
-                k,
-                part: g,
-                level: table.domain_level(f as usize, k as usize),
-                frame: first_frame,
-                interior: base + z.copies as u32,
-            });
-            out.push((base, first_triangle, region));
-            base += z.points as u32;
-            first_triangle += z.triangles as u32;
-            first_frame += z.frame as u32;
-        }
-        out
+        let mut at = [self.num_shared() as u32, 0, 0];
+        let firsts: Vec<[u32; 3]> = self
+            .sizes
+            .iter()
+            .map(|z| {
+                let first = at;
+                at[0] += z.points as u32;
+                at[1] += z.triangles as u32;
+                at[2] += z.frame as u32;
+                first
+            })
+            .collect();
+        (0..self.domains.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                let ((f, k), z) = (self.domains[i], &self.sizes[i]);
+                let [base, first_triangle, first_frame] = firsts[i];
+                let region = z.grid.map(|g| GridRegion {
+                    first_triangle,
+                    face: f,
+                    k,
+                    part: g,
+                    level: table.domain_level(f as usize, k as usize),
+                    frame: first_frame,
+                    interior: base + z.copies as u32,
+                });
+                (base, first_triangle, region)
+            })
+            .collect()
     }
 
     /// Total points (shared ones included) and triangles; an error past 2^31 points.

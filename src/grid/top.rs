@@ -388,6 +388,59 @@ mod tests {
 mod stack_tests {
     use super::*;
 
+    /// The union of the boxes of the primitives below reference `r`, and their count.
+    fn below(top: &Top, boxes: &[Bounds], r: Ref) -> (Bounds, usize) {
+        if r & LEAF != 0 {
+            return (boxes[(r & !LEAF) as usize], 1);
+        }
+        top.nodes[r as usize]
+            .child
+            .iter()
+            .filter(|&&c| c != EMPTY)
+            .fold((NONE, 0), |(b, n), &c| {
+                let (cb, cn) = below(top, boxes, c);
+                (union(b, cb), n + cn)
+            })
+    }
+
+    /// Every child box of every node is the union of the boxes of the primitives below it,
+    /// exactly (`==` on `f32`: the same values), and every primitive is below the root once;
+    /// on random boxes, some sharing corners, with zeros of both signs among the bounds.
+    #[test]
+    fn child_boxes_are_the_unions_below() {
+        let mut rng = crate::harness::rng::SplitMix64(77);
+        for n in [2usize, 9, 64, 1000, 5000] {
+            let boxes: Vec<Bounds> = (0..n)
+                .map(|i| {
+                    let c: [f32; 3] = std::array::from_fn(|_| match i % 5 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        _ => (rng.next_f64() * 8.0 - 4.0) as f32,
+                    });
+                    let e: [f32; 3] = std::array::from_fn(|_| (rng.next_f64() * 0.3) as f32);
+                    [
+                        std::array::from_fn(|a| c[a] - e[a]),
+                        std::array::from_fn(|a| c[a] + e[a]),
+                    ]
+                })
+                .collect();
+            let top = Top::build(&boxes);
+            assert_eq!(
+                below(&top, &boxes, top.root).1,
+                n,
+                "n {n}: every primitive once"
+            );
+            for node in &top.nodes {
+                for (c, &r) in node.child.iter().enumerate() {
+                    if r == EMPTY {
+                        continue;
+                    }
+                    assert_eq!(node.boxes.child(c), below(&top, &boxes, r).0, "n {n}");
+                }
+            }
+        }
+    }
+
     /// The stack bound of a hand-built tree: the root has three children, an inner node with
     /// eight primitives among them (`(3 − 1) + 8`), and a second inner node with two.
     #[test]
