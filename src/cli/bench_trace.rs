@@ -22,7 +22,9 @@ pub struct TraceBenchArgs {
     pub rays: usize,
     #[command(flatten)]
     pub threads: ThreadArgs,
-    /// Repetitions; the median is reported.
+    /// Repetitions of each ray measurement; the median is reported. The build runs once, the
+    /// process's first (cold: its pages are all new), where `limitray bench` reports the median
+    /// of several builds in one process (warm) for both engines.
     #[arg(long, default_value_t = 5)]
     pub reps: usize,
     /// Subdivision rules.
