@@ -153,18 +153,21 @@ pub fn dice_each<C: Send>(
         let mut shared_positions = vec![[0.0; 3]; n];
         let mut shared_codes = vec![0u32; n];
         p.eval_shared(&mut shared_positions, &mut [], &mut [], &mut shared_codes)?;
-        let starts = p.layout();
-        let domains: Vec<DomainPlan> = (0..starts.len())
+        let firsts = p.firsts();
+        // The regions (each looks its domain's level up in the table) in parallel; a region's
+        // frame is the domain's own list ([`DomainView::frame`], offset 0).
+        let domains: Vec<DomainPlan> = (0..firsts.len())
             .into_par_iter()
             .with_min_len(1024)
             .map(|i| {
-                let ((_, first_triangle, region), (face, k)) = (starts[i], p.domains[i]);
+                let [base, first_triangle, _] = firsts[i];
+                let (face, k) = p.domains[i];
                 DomainPlan {
                     face,
                     k,
                     first_triangle,
                     triangles: p.sizes[i].triangles as u32,
-                    region: region.map(|g| GridRegion { frame: 0, ..g }),
+                    region: p.region(i, [base, first_triangle, 0]),
                 }
             })
             .collect();
@@ -193,7 +196,7 @@ pub fn dice_each<C: Send>(
                 |(scratch, b), (mut store, job)| {
                     for i in job {
                         let (z, d) = (&p.sizes[i], &layout.domains[i]);
-                        let base = starts[i].0;
+                        let base = firsts[i][0];
                         let slices = DomainSlices {
                             base,
                             positions: room(&mut b.positions, z.points),

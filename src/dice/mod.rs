@@ -612,14 +612,11 @@ impl Prepared<'_> {
         )
     }
 
-    /// Each domain's first point, first triangle, and its grid region if it has one, in
-    /// domain order: the sums in one pass, the regions (each looks its domain's level up in
-    /// the table) in parallel.
-    fn layout(&self) -> Vec<(u32, u32, Option<GridRegion>)> {
-        let table = self.ctx.table;
+    /// Each domain's first point, first triangle and first frame entry, in domain order (sums
+    /// only).
+    fn firsts(&self) -> Vec<[u32; 3]> {
         let mut at = [self.num_shared() as u32, 0, 0];
-        let firsts: Vec<[u32; 3]> = self
-            .sizes
+        self.sizes
             .iter()
             .map(|z| {
                 let first = at;
@@ -628,25 +625,22 @@ impl Prepared<'_> {
                 at[2] += z.frame as u32;
                 first
             })
-            .collect();
-        (0..self.domains.len())
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(|i| {
-                let ((f, k), z) = (self.domains[i], &self.sizes[i]);
-                let [base, first_triangle, first_frame] = firsts[i];
-                let region = z.grid.map(|g| GridRegion {
-                    first_triangle,
-                    face: f,
-                    k,
-                    part: g,
-                    level: table.domain_level(f as usize, k as usize),
-                    frame: first_frame,
-                    interior: base + z.copies as u32,
-                });
-                (base, first_triangle, region)
-            })
             .collect()
+    }
+
+    /// Domain `i`'s grid region, if it has one, from its firsts ([`Self::firsts`]; the frame
+    /// entry is where the region's frame starts).
+    fn region(&self, i: usize, [base, first_triangle, frame]: [u32; 3]) -> Option<GridRegion> {
+        let ((face, k), z) = (self.domains[i], &self.sizes[i]);
+        z.grid.map(|part| GridRegion {
+            first_triangle,
+            face,
+            k,
+            part,
+            level: self.ctx.table.domain_level(face as usize, k as usize),
+            frame,
+            interior: base + z.copies as u32,
+        })
     }
 
     /// Total points (shared ones included) and triangles; an error past 2^31 points.
@@ -682,7 +676,10 @@ impl Prepared<'_> {
         let (shared_normals, normals) = out.normals.split_at_mut(n);
         let (shared_params, params) = out.params.split_at_mut(n);
         self.eval_shared(shared_positions, shared_normals, shared_params, &mut [])?;
-        out.grids = self.layout().into_iter().filter_map(|l| l.2).collect();
+        let firsts = self.firsts();
+        out.grids = (0..firsts.len())
+            .filter_map(|i| self.region(i, firsts[i]))
+            .collect();
         let ctx = DomainCtx {
             shared_positions,
             ..self.ctx
