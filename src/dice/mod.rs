@@ -590,17 +590,20 @@ impl Prepared<'_> {
                         put(i, eval_point(table, displacer, face, k, u, v)?);
                     }
                 } else {
-                    // A domain's points in a row (an edge's) share their leaves' parts.
+                    // A run's points (an edge's) lie in one domain and share its leaves'
+                    // parts, kept while the next runs are in the same domain.
                     scratch.points.clear();
                     let mut domain = None;
-                    for &at in coords.iter() {
+                    let mut rest = &coords[..];
+                    for run in runs {
+                        let (mine, after) = rest.split_at(run.len());
+                        rest = after;
+                        let Some(at) = mine.first() else { continue };
                         if domain != Some((at.face, at.k)) {
                             domain = Some((at.face, at.k));
                             scratch.kept.clear();
                         }
-                        scratch
-                            .points
-                            .push(table.eval_d1_kept(at, &mut scratch.kept)?);
+                        table.eval_d1_points(mine, &mut scratch.kept, &mut scratch.points)?;
                     }
                     scratch.finish(table, at, put)?;
                 }

@@ -124,7 +124,7 @@ impl PatchTable {
     /// ([`Self::check_error`]): called out of line, a `FaceCoord` stored by its caller field
     /// by field is read back with wider loads, a store-forwarding stall a point.
     #[inline(always)]
-    fn check(&self, at: FaceCoord) -> Result<()> {
+    pub(super) fn check(&self, at: FaceCoord) -> Result<()> {
         let (face, k, u, v) = (at.face as usize, at.k as usize, at.u, at.v);
         let inside = face < self.num_faces()
             && k < self.sub_faces(face)

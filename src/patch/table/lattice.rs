@@ -211,15 +211,65 @@ impl Kept {
 }
 
 impl PatchTable {
-    /// [`Self::eval_d1`], the same bits, with the parts of leaves that points share (a
-    /// single-crease patch's crease pieces, a Stam patch's sub-patches) kept in `kept` for the
-    /// next points (made once, not once per point).
-    pub(crate) fn eval_d1_kept(
+    /// [`Self::eval_d1`] at each of `coords`, appended to `out`: the same bits, with the parts
+    /// of leaves that points share (a single-crease patch's crease pieces, a Stam patch's
+    /// sub-patches) kept in `kept` for the next points (made once, not once per point). Where
+    /// the points all lie in one domain that is one B-spline patch (a regular face's side
+    /// or corner, as the shared points of dicing come), its control points are gathered once
+    /// and no point looks its leaf up; points of one `u` (a side along `v`) share their rows
+    /// contracted along `u`, so each costs 12 multiply-adds instead of 44.
+    pub(crate) fn eval_d1_points(
         &self,
-        at: FaceCoord,
+        coords: &[FaceCoord],
         kept: &mut Kept,
-    ) -> crate::error::Result<PointD1> {
-        self.eval_d1_with(at, kept)
+        out: &mut Vec<PointD1>,
+    ) -> crate::error::Result<()> {
+        let Some(patch) = self.one_bspline(coords) else {
+            for &at in coords {
+                out.push(self.eval_d1_with(at, kept)?);
+            }
+            return Ok(());
+        };
+        for &at in coords {
+            self.check(at)?;
+        }
+        let grid = self.grid(patch);
+        let u = coords[0].u;
+        // The root's frame, as `eval_d1` applies it (the identity up to the sign of zeros).
+        if coords.len() > 1 && coords.iter().all(|c| c.u.to_bits() == u.to_bits()) {
+            let rows = bspline::contract_u(&grid, &bspline::basis(u), &bspline::basis_d1(u));
+            out.extend(coords.iter().map(|c| {
+                let (w, d1) = (bspline::basis(c.v), bspline::basis_d1(c.v));
+                Frame::UNIT.face_point_d1(bspline::finish_v(&rows, &w, &d1))
+            }));
+        } else {
+            out.extend(
+                coords
+                    .iter()
+                    .map(|c| Frame::UNIT.face_point_d1(bspline::eval_d1(&grid, c.u, c.v))),
+            );
+        }
+        Ok(())
+    }
+
+    /// The B-spline patch that is the whole of the domain of every point of `coords` (one
+    /// domain for all), in an exact Catmull-Clark table; `None` otherwise.
+    fn one_bspline(&self, coords: &[FaceCoord]) -> Option<&super::Patch> {
+        let first = coords.first()?;
+        let plain =
+            self.approx.is_none() && self.loop_surface.is_none() && self.quad_approx.is_none();
+        let (face, k) = (first.face as usize, first.k as usize);
+        if !plain
+            || face >= self.num_faces()
+            || k >= self.sub_faces(face)
+            || coords
+                .iter()
+                .any(|c| (c.face, c.k) != (first.face, first.k))
+        {
+            return None;
+        }
+        self.root_patch(face, k)
+            .filter(|p| matches!(p.kind, PatchKind::BSpline { .. }))
     }
 }
 
@@ -333,29 +383,59 @@ mod tests {
         );
     }
 
-    /// `eval_d1_kept` equals `eval_d1` bit for bit (signs of zeros included) at points in
-    /// rows along each domain's sides and diagonal, as shared points come (the parts kept
-    /// from point to point, and from domain to domain where they are not cleared), on meshes
-    /// with B-spline, single-crease, Stam and end-cap leaves; holes are errors for both.
+    /// `eval_d1_points` equals `eval_d1` bit for bit (signs of zeros included) on runs along
+    /// each domain's sides and diagonal and at its corners, as shared points come (the parts
+    /// kept from run to run, and from domain to domain where they are not cleared), on meshes
+    /// with B-spline roots (both of their paths) and single-crease, Stam and end-cap leaves;
+    /// holes are errors for both.
     #[test]
-    fn kept_is_eval_bit_for_bit() {
+    fn points_are_eval_bit_for_bit() {
         let bits = |p: super::PointD1| [p.p, p.du, p.dv].map(|v| v.map(f64::to_bits));
+        let mut paths = [0usize; 3];
         for table in tables() {
             let mut kept = super::Kept::default();
             for f in 0..table.num_faces() {
                 for k in 0..table.sub_faces(f) {
-                    for i in 0..=16 {
-                        let t = i as f64 / 16.0;
-                        for (u, v) in [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t), (t, t)] {
-                            let at = FaceCoord::new(f as u32, k as u32, u, v);
-                            match (table.eval_d1(at), table.eval_d1_kept(at, &mut kept)) {
-                                (Ok(a), Ok(b)) => {
-                                    assert_eq!(bits(a), bits(b), "({f}, {k}) at ({u}, {v})")
-                                }
-                                (Err(_), Err(_)) => {}
-                                (a, b) => panic!("({f}, {k}) at ({u}, {v}): {a:?} but {b:?}"),
+                    let (f32_, k32) = (f as u32, k as u32);
+                    let mut runs: Vec<Vec<FaceCoord>> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)]
+                        .into_iter()
+                        .map(|(u, v)| vec![FaceCoord::new(f32_, k32, u, v)])
+                        .collect();
+                    for r in [2, 3, 4, 7, 16] {
+                        let side = |g: &dyn Fn(f64) -> (f64, f64)| -> Vec<FaceCoord> {
+                            (1..r)
+                                .map(|i| {
+                                    let (u, v) = g(i as f64 / r as f64);
+                                    FaceCoord::new(f32_, k32, u, v)
+                                })
+                                .collect()
+                        };
+                        runs.push(side(&|t| (t, 0.0)));
+                        runs.push(side(&|t| (1.0, t)));
+                        runs.push(side(&|t| (1.0 - t, 1.0)));
+                        runs.push(side(&|t| (0.0, 1.0 - t)));
+                        runs.push(side(&|t| (t, t)));
+                    }
+                    for run in &runs {
+                        let mut got = Vec::new();
+                        let done = table.eval_d1_points(run, &mut kept, &mut got);
+                        let want: Result<Vec<_>, _> =
+                            run.iter().map(|&at| table.eval_d1(at)).collect();
+                        match (want, done) {
+                            (Ok(want), Ok(())) => {
+                                let got: Vec<_> = got.into_iter().map(bits).collect();
+                                let want: Vec<_> = want.into_iter().map(bits).collect();
+                                assert_eq!(got, want, "({f}, {k}) on {run:?}");
                             }
+                            (Err(_), Err(_)) => {}
+                            (a, b) => panic!("({f}, {k}) on {run:?}: {a:?} but {b:?}"),
                         }
+                        let same_u = run.len() > 1 && run.iter().all(|c| c.u == run[0].u);
+                        paths[match table.one_bspline(run) {
+                            None => 0,
+                            Some(_) if same_u => 1,
+                            Some(_) => 2,
+                        }] += 1;
                     }
                     if f % 2 == 0 {
                         kept.clear();
@@ -363,6 +443,7 @@ mod tests {
                 }
             }
         }
+        assert!(paths.iter().all(|&n| n > 0), "runs by path: {paths:?}");
     }
 
     /// A hole at a lattice point leaves the whole domain to point-by-point evaluation (which

@@ -93,6 +93,7 @@ impl Frame {
     }
 
     /// [`Self::face_point`] for the position and first derivatives alone (the same bits).
+    #[inline]
     pub(crate) fn face_point_d1(&self, pt: PointD1) -> PointD1 {
         let (a, b) = (self.a, self.b);
         let h2 = a[0] * a[0] + a[1] * a[1];
