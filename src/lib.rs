@@ -43,6 +43,7 @@ pub mod prefetch;
 pub mod refine;
 #[cfg(feature = "render")]
 pub mod render;
+pub mod stages;
 pub mod surface;
 pub mod texture;
 pub mod threads;

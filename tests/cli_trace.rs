@@ -119,8 +119,8 @@ fn accuracy_and_bench_print_json() {
         let v: serde_json::Value = serde_json::from_str(l).unwrap();
         assert!(v["max_bound_ratio"].as_f64().unwrap() <= 1.0, "{l}");
     }
-    let o = run(
-        &[
+    let bench = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
             "bench-trace",
             &cube,
             "--rate",
@@ -129,11 +129,13 @@ fn accuracy_and_bench_print_json() {
             "2000",
             "--reps",
             "1",
-        ],
-        "",
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        ];
+        args.extend_from_slice(extra);
+        let o = run(&args, "");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let v = bench(&[]);
     assert_eq!(v["triangles"], 6 * 2 * 16);
     // One 4×4-quad block per face, all six under the 8-wide root: one level, and a walk that
     // holds at most the root's six children.
@@ -147,6 +149,36 @@ fn accuracy_and_bench_print_json() {
     );
     // The leaf test the traversal ran: the one this processor gets.
     assert_eq!(v["leaf_test"], limitray::grid::window::leaf_isa());
+    assert!(v.get("stages_ms").is_none());
+    // With --stages: the build's stages in order, table, dicing, then grid, adding up to no
+    // more than the three parts' times (the JSON rounds those to 0.1 ms and the stages to
+    // 0.01: 0.15 + 0.09 ms at most for the cube's 17 stages).
+    let v = bench(&["--stages"]);
+    let stages = v["stages_ms"].as_array().expect("stages_ms");
+    let names: Vec<&str> = stages.iter().map(|s| s[0].as_str().unwrap()).collect();
+    let first = |prefix: &str| names.iter().position(|n| n.starts_with(prefix)).unwrap();
+    assert!(
+        first("table:") < first("dice:") && first("dice:") < first("grid:"),
+        "{names:?}"
+    );
+    for name in [
+        "table: level 0",
+        "dice: shared points",
+        "dice: domains and their stores",
+        "grid: block plans",
+        "grid: top-level binning",
+        "grid: top-level boxes",
+    ] {
+        assert!(names.contains(&name), "{name} missing from {names:?}");
+    }
+    let sum: f64 = stages.iter().map(|s| s[1].as_f64().unwrap()).sum();
+    let total: f64 = ["table_ms", "dice_ms", "grid_ms"]
+        .iter()
+        .map(|k| v[k].as_f64().unwrap())
+        .sum();
+    assert!(sum <= total + 0.3, "stages {sum} ms, build {total} ms");
+    let bad = run(&["bench-trace", &cube, "--exact", "--stages"], "");
+    assert_eq!(bad.status.code(), Some(2));
     let bad = run(&["dice", "/nonexistent.obj", "-o", "-"], "");
     assert_eq!(bad.status.code(), Some(2));
     let bad = run(&["dice", &cube, "--rate", "0", "-o", "-"], "");

@@ -42,6 +42,11 @@ pub struct TraceBenchArgs {
     /// the dicing time then includes the displacement.
     #[arg(long, value_parser = super::args::parse_displacement)]
     pub displace: Option<crate::dice::Displacement>,
+    /// Also time the build stage by stage (`crate::stages`): `stages_ms`, a list of `[stage,
+    /// milliseconds]` in the order the stages first ended (table, dicing, grid), which add up
+    /// to the build's time but for the gaps between the named stages.
+    #[arg(long)]
+    pub stages: bool,
 }
 
 /// Median of wall-clock seconds of `reps` runs of `f`.
@@ -74,12 +79,19 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
                 "--exact measures the exact limit surface, which --displace leaves: drop one",
             ));
         }
+        if args.stages {
+            return Err(crate::error::Error::new(
+                crate::error::ErrorKind::Usage,
+                "--stages times the diced build's stages, which --exact does not run: drop one",
+            ));
+        }
         return args
             .threads
             .pool()?
             .install(|| exact_bench(args, &mesh, threads));
     }
     args.threads.pool()?.install(|| {
+        let recording = args.stages.then(crate::stages::Recording::start);
         let t0 = std::time::Instant::now();
         let table = PatchTable::with_options(
             &mesh,
@@ -102,6 +114,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             },
         )?;
         let t3 = std::time::Instant::now();
+        let stages = recording.map(crate::stages::Recording::finish);
         let tris = bvh.triangles;
         let bounds = bvh.bounds();
         let ms =
@@ -121,6 +134,12 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             "bytes_per_triangle": round(bvh.bytes() as f64 / tris.max(1) as f64, 1),
             "leaf_test": crate::grid::window::leaf_isa(),
         });
+        if let Some(stages) = stages {
+            out["stages_ms"] = stages
+                .into_iter()
+                .map(|(name, s)| serde_json::json!([name, round(s * 1e3, 2)]))
+                .collect();
+        }
         let sets = [
             ("coherent", camera_rays(bounds, args.rays)),
             ("incoherent", random_rays(bounds, args.rays, 11)),

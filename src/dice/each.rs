@@ -153,6 +153,7 @@ pub fn dice_each<C: Send>(
         let mut shared_positions = vec![[0.0; 3]; n];
         let mut shared_codes = vec![0u32; n];
         p.eval_shared(&mut shared_positions, &mut [], &mut [], &mut shared_codes)?;
+        crate::stages::mark("dice: shared points");
         let firsts = p.firsts();
         // The regions (each looks its domain's level up in the table) in parallel; a region's
         // frame is the domain's own list ([`DomainView::frame`], offset 0).
@@ -180,6 +181,7 @@ pub fn dice_each<C: Send>(
                 .collect(),
             triangles,
         };
+        crate::stages::mark("dice: domain plans");
         let stores = plan(&layout)?;
         assert_eq!(stores.len(), layout.jobs.len(), "one store per job");
         let ctx = DomainCtx {
@@ -188,7 +190,7 @@ pub fn dice_each<C: Send>(
         };
         let (layout, visit) = (&layout, &visit);
         let (shared_positions, shared_codes) = (&shared_positions, &shared_codes);
-        stores
+        let done = stores
             .into_par_iter()
             .zip(layout.jobs.clone())
             .try_for_each_init(
@@ -226,6 +228,8 @@ pub fn dice_each<C: Send>(
                     }
                     Ok::<(), Error>(())
                 },
-            )
+            );
+        crate::stages::mark("dice: domains and their stores");
+        done
     })
 }

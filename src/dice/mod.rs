@@ -472,6 +472,7 @@ fn prepare<R>(
         "lower the dicing rate (--rate, or the scene's rate, max_rate or pixels_per_edge)",
     )?;
 
+    crate::stages::mark("dice: rates");
     // Entities with a seam: infinitely sharp edges, and vertices with one such edge or an
     // infinitely sharp corner.
     let sharp_edge: Vec<bool> = level
@@ -498,6 +499,7 @@ fn prepare<R>(
             (0..ks).map(move |k| (f as u32, k as u32))
         })
         .collect();
+    crate::stages::mark("dice: shared layout");
     let ctx = DomainCtx {
         table,
         level,
@@ -520,6 +522,7 @@ fn prepare<R>(
             ctx.domain_size(f as usize, k as usize, scratch)
         })
         .collect();
+    crate::stages::mark("dice: sizes");
     then(&Prepared {
         ctx,
         domains,

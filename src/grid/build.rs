@@ -352,6 +352,7 @@ impl Planning {
         if prim_boxes.is_empty() {
             return Ok(m);
         }
+        crate::stages::mark("grid: block bounds and strips");
         m.top = Top::build(&prim_boxes);
         // Block headers and strips stay in the order they were made (the mesh's), the order
         // of the blocks' vertices: put in the top level's depth-first order instead, the
@@ -366,6 +367,7 @@ impl Planning {
         m.blocks = headers;
         m.strips = strips;
         m.loose = loose;
+        crate::stages::mark("grid: block fetch list");
         Ok(m)
     }
 }
@@ -479,6 +481,7 @@ impl GridMesh {
                     *loose = bytemuck::zeroed_vec(counts.iter().sum());
                     let mut rest = &mut loose[..];
                     let stores = planning.plan(&regions, &runs)?;
+                    crate::stages::mark("grid: block plans");
                     Ok(stores
                         .into_iter()
                         .zip(counts)

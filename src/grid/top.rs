@@ -103,6 +103,7 @@ impl Top {
             stack: 0,
         };
         // The collapse: each entry is a binary node to become an 8-wide node at `slot`.
+        crate::stages::mark("grid: top-level binning");
         let collapse = Collapse::new(&bvh2);
         let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, 1)];
         top.nodes.push(Node8::EMPTY);
@@ -131,6 +132,7 @@ impl Top {
             }
             top.nodes[slot].child = refs;
         }
+        crate::stages::mark("grid: top-level collapse");
         // Exact boxes, children before parents (children are pushed after their parent).
         let mut content = vec![NONE; top.nodes.len()];
         for n in (0..top.nodes.len()).rev() {
@@ -152,6 +154,7 @@ impl Top {
             top.nodes[n] = node;
         }
         top.stack = top.stack_need();
+        crate::stages::mark("grid: top-level boxes");
         top
     }
 

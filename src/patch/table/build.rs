@@ -539,6 +539,7 @@ impl PatchTable {
         }
         let (mut base, _) = Level::base(mesh, &options)?;
         edit::apply_tags(&[], &mut base, mesh);
+        crate::stages::mark("table: level 0");
         let method = options.crease_method;
         // Faces under a hierarchical edit are isolated at least one level below it.
         let deepest = mesh.edits.iter().map(|e| e.level()).max().unwrap_or(0);
@@ -664,8 +665,10 @@ impl PatchTable {
             }
             table.root_offsets.push(table.roots.len() as u32);
         }
+        crate::stages::mark("table: roots");
         let mut settled = table.settle_all(&base, 0, &quads, |i| quad_slots[i], 0);
         // Pending faces in base face order, as one pass over the faces would list them.
+        crate::stages::mark("table: level-0 patches");
         settled.append(&mut pending);
         settled.sort_by_key(|p| p.0);
         let mut pending = settled;
@@ -745,6 +748,7 @@ impl PatchTable {
             refined = Some(child);
             pending = next;
         }
+        crate::stages::mark("table: refinement");
         drop(refined);
         // Dicing reads level 0 too: kept unless edits at level 0 changed its tags or holes.
         if mesh.edits.iter().all(|e| e.level() > 0) {
@@ -771,6 +775,7 @@ impl PatchTable {
         if opts.surface == Approximation::Gregory {
             table.quad_approx = Some(std::sync::Arc::new(QuadApprox::new(mesh, options, &table)?));
         }
+        crate::stages::mark("table: tree, stats and points");
         Ok(table)
     }
 
