@@ -28,22 +28,15 @@ impl PatchTable {
         nv: u32,
         mut out: impl FnMut(PointD1),
     ) -> bool {
-        if self.is_approximate()
-            || self.loop_surface.is_some()
-            || face >= self.num_faces()
-            || k >= self.sub_faces(face)
-        {
+        if !self.exact_domain(face, k) {
             return false;
         }
-        if let Some(patch) = self.root_patch(face, k) {
-            if let PatchKind::BSpline { .. } = patch.kind {
-                bspline::eval_lattice(&self.grid(patch), nu, nv, |pt| {
-                    // The root's frame, as `eval` applies it (the identity up to the sign of
-                    // zeros).
-                    out(Frame::UNIT.face_point_d1(pt))
-                });
-                return true;
-            }
+        if let Some(patch) = self.bspline_root(face, k) {
+            bspline::eval_lattice(&self.grid(patch), nu, nv, |pt| {
+                // The root's frame, as `eval` applies it (the identity up to the sign of zeros).
+                out(Frame::UNIT.face_point_d1(pt))
+            });
+            return true;
         }
         // Every point's leaf first: a hole anywhere leaves the domain to point-by-point
         // evaluation, with nothing evaluated here.
@@ -224,7 +217,11 @@ impl PatchTable {
         kept: &mut Kept,
         out: &mut Vec<PointD1>,
     ) -> crate::error::Result<()> {
-        let Some(patch) = self.one_bspline(coords) else {
+        let one_domain = coords
+            .first()
+            .filter(|a| coords.iter().all(|c| (c.face, c.k) == (a.face, a.k)));
+        let Some(patch) = one_domain.and_then(|a| self.bspline_root(a.face as usize, a.k as usize))
+        else {
             for &at in coords {
                 out.push(self.eval_d1_with(at, kept)?);
             }
@@ -252,20 +249,18 @@ impl PatchTable {
         Ok(())
     }
 
-    /// The B-spline patch that is the whole of the domain of every point of `coords` (one
-    /// domain for all), in an exact Catmull-Clark table; `None` otherwise.
-    fn one_bspline(&self, coords: &[FaceCoord]) -> Option<&super::Patch> {
-        let first = coords.first()?;
-        let plain =
-            self.approx.is_none() && self.loop_surface.is_none() && self.quad_approx.is_none();
-        let (face, k) = (first.face as usize, first.k as usize);
-        if !plain
-            || face >= self.num_faces()
-            || k >= self.sub_faces(face)
-            || coords
-                .iter()
-                .any(|c| (c.face, c.k) != (first.face, first.k))
-        {
+    /// Whether domain `(face, k)` exists and the table evaluates it exactly (a Catmull-Clark
+    /// table without an approximation).
+    fn exact_domain(&self, face: usize, k: usize) -> bool {
+        !self.is_approximate()
+            && self.loop_surface.is_none()
+            && face < self.num_faces()
+            && k < self.sub_faces(face)
+    }
+
+    /// The B-spline patch that is the whole of domain `(face, k)`, in an exact table.
+    fn bspline_root(&self, face: usize, k: usize) -> Option<&super::Patch> {
+        if !self.exact_domain(face, k) {
             return None;
         }
         self.root_patch(face, k)
@@ -431,7 +426,10 @@ mod tests {
                             (a, b) => panic!("({f}, {k}) on {run:?}: {a:?} but {b:?}"),
                         }
                         let same_u = run.len() > 1 && run.iter().all(|c| c.u == run[0].u);
-                        paths[match table.one_bspline(run) {
+                        let one_domain =
+                            run.iter().all(|c| (c.face, c.k) == (run[0].face, run[0].k));
+                        let root = table.bspline_root(run[0].face as usize, run[0].k as usize);
+                        paths[match root.filter(|_| one_domain) {
                             None => 0,
                             Some(_) if same_u => 1,
                             Some(_) => 2,
