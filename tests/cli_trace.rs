@@ -150,10 +150,14 @@ fn accuracy_and_bench_print_json() {
     // The leaf test the traversal ran: the one this processor gets.
     assert_eq!(v["leaf_test"], limitray::grid::window::leaf_isa());
     assert!(v.get("stages_ms").is_none());
-    // With --stages: the build's stages in order, table, dicing, then grid, adding up to no
-    // more than the three parts' times (the JSON rounds those to 0.1 ms and the stages to
-    // 0.01: 0.15 + 0.09 ms at most for the cube's 17 stages).
-    let v = bench(&["--stages"]);
+    assert_eq!(v["warm"], 0);
+    // With --stages (after two warm builds): the measured build's stages in order, table,
+    // dicing, then grid, adding up to no more than the three parts' times (the JSON rounds
+    // those to 0.1 ms and the stages to 0.01: 0.15 + 0.09 ms at most for the cube's 17
+    // stages); the warm builds' stages are not among them.
+    let v = bench(&["--stages", "--warm", "2"]);
+    assert_eq!(v["warm"], 2);
+    assert_eq!(v["triangles"], 6 * 2 * 16);
     let stages = v["stages_ms"].as_array().expect("stages_ms");
     let names: Vec<&str> = stages.iter().map(|s| s[0].as_str().unwrap()).collect();
     let first = |prefix: &str| names.iter().position(|n| n.starts_with(prefix)).unwrap();

@@ -22,11 +22,17 @@ pub struct TraceBenchArgs {
     pub rays: usize,
     #[command(flatten)]
     pub threads: ThreadArgs,
-    /// Repetitions of each ray measurement; the median is reported. The build runs once, the
-    /// process's first (cold: its pages are all new), where `limitray bench` reports the median
-    /// of several builds in one process (warm) for both engines.
+    /// Repetitions of each ray measurement; the median is reported. The build is measured
+    /// once: the process's first (cold: its pages are all new) unless `--warm` builds first,
+    /// where `limitray bench` reports the median of several builds in one process (warm) for
+    /// both engines.
     #[arg(long, default_value_t = 5)]
     pub reps: usize,
+    /// Builds made and dropped before the measured one, so that it runs warm (the allocator's
+    /// memory already paged in), as `limitray bench` measures builds; its times and
+    /// `--stages` are then those of a warm build.
+    #[arg(long, default_value_t = 0)]
+    pub warm: usize,
     /// Subdivision rules.
     #[command(flatten)]
     pub rules: RuleArgs,
@@ -91,29 +97,36 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             .install(|| exact_bench(args, &mesh, threads));
     }
     args.threads.pool()?.install(|| {
+        let build = || -> Result<_> {
+            let t0 = std::time::Instant::now();
+            let table = PatchTable::with_options(
+                &mesh,
+                args.rules.options(&mesh),
+                PatchOptions {
+                    surface: args.surface.into(),
+                    ..PatchOptions::default()
+                },
+            )?;
+            let t1 = std::time::Instant::now();
+            // Dicing stores the blocks (`dice_ms`); the grid stage is the strips and the top
+            // level (`grid_ms`).
+            let (bvh, t2) = GridMesh::dice_staged(
+                &table,
+                &mesh,
+                &DiceOptions {
+                    rate: DiceRate::Uniform(args.rate),
+                    max_rate: 1024,
+                    displace: args.displace.clone(),
+                },
+            )?;
+            Ok((table, bvh, [t0, t1, t2, std::time::Instant::now()]))
+        };
+        for _ in 0..args.warm {
+            drop(build()?);
+        }
         let recording = args.stages.then(crate::stages::Recording::start);
-        let t0 = std::time::Instant::now();
-        let table = PatchTable::with_options(
-            &mesh,
-            args.rules.options(&mesh),
-            PatchOptions {
-                surface: args.surface.into(),
-                ..PatchOptions::default()
-            },
-        )?;
-        let t1 = std::time::Instant::now();
-        // Dicing stores the blocks (`dice_ms`); the grid stage is the strips and the top
-        // level (`grid_ms`).
-        let (bvh, t2) = GridMesh::dice_staged(
-            &table,
-            &mesh,
-            &DiceOptions {
-                rate: DiceRate::Uniform(args.rate),
-                max_rate: 1024,
-                displace: args.displace.clone(),
-            },
-        )?;
-        let t3 = std::time::Instant::now();
+        // The table stays alive while the rays run, as it did before `--warm`.
+        let (_table, bvh, [t0, t1, t2, t3]) = build()?;
         let stages = recording.map(crate::stages::Recording::finish);
         let tris = bvh.triangles;
         let bounds = bvh.bounds();
@@ -123,6 +136,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             "surface": crate::patch::approx::Approximation::from(args.surface).name(),
             "triangles": tris,
             "threads": threads,
+            "warm": args.warm,
             "table_ms": ms(t0, t1),
             "dice_ms": ms(t1, t2),
             "grid_ms": ms(t2, t3),
