@@ -115,6 +115,66 @@ fn reflect(grid: &[Combo; 16], on: usize, inside: usize) -> Combo {
     out
 }
 
+/// The sixteen control points of face `f` of `level` when it is an interior B-spline patch
+/// whose every corner is a smooth valence-4 vertex of quads with nothing sharp around it,
+/// as vertex indices in grid order; `None` otherwise, whatever [`classify`] makes of the face.
+/// Where it gives the points, [`classify`] gives the same ones (each a vertex alone) and kind
+/// `BSpline { closed: 0 }`: the common case taken without [`Combo`]s (a quarter of the 316²
+/// grid's level-0 decisions went to building and copying them).
+pub fn interior_points(level: &Level, f: usize) -> Option<[u32; 16]> {
+    let topo = &level.topo;
+    let fv = topo.face_vertices(f);
+    if fv.len() != 4 {
+        return None;
+    }
+    let fe = topo.face_edge_list(f);
+    for &v in fv {
+        let v = v as usize;
+        let tag = topo.vert_tags[v];
+        if tag.nonmanifold || tag.boundary || level.vertex_sharpness[v] != 0.0 {
+            return None;
+        }
+        let (edges, faces) = (topo.vertex_edges(v), topo.vertex_faces(v));
+        if edges.len() != 4 || faces.len() != 4 {
+            return None;
+        }
+        if edges
+            .iter()
+            .any(|&e| crease::is_sharp(level.edge_sharpness[e as usize]))
+            || faces.iter().any(|&g| topo.face_size(g as usize) != 4)
+        {
+            return None;
+        }
+    }
+    let mut grid = [0u32; 16];
+    for k in 0..4 {
+        let k1 = (k + 1) % 4;
+        let e = fe[k];
+        if topo.edge_face_count(e) != 2 || topo.edge_nonmanifold[e as usize] {
+            return None;
+        }
+        grid[at(C[k])] = fv[k];
+        // The neighbour across edge k, where the edge runs v_{k+1} -> v_k.
+        let g = topo
+            .edge_face_list(e)
+            .iter()
+            .copied()
+            .find(|&g| g as usize != f)? as usize;
+        let gv = topo.face_vertices(g);
+        let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
+        grid[at(sub(C[k], V[k]))] = gv[(m + 2) % 4];
+        grid[at(sub(C[k1], V[k]))] = gv[(m + 3) % 4];
+        // The diagonal at corner k: the face opposite f around v_k.
+        let v = fv[k] as usize;
+        let (faces, corners) = (topo.vertex_faces(v), topo.vertex_face_corners(v));
+        let ci = faces.iter().position(|&g| g as usize == f)?;
+        let oi = (ci + 2) % 4;
+        let gv = topo.face_vertices(faces[oi] as usize);
+        grid[at(sub(sub(C[k], U[k]), V[k]))] = gv[(corners[oi] as usize + 2) % 4];
+    }
+    Some(grid)
+}
+
 /// Classifies face `f` of `level` and gathers its control points, or `None` when the face is
 /// irregular (needs more refinement). `single_crease` allows single-crease patches: one
 /// semi-sharp edge, continued straight at both its ends by edges of the same sharpness, nothing
@@ -333,4 +393,101 @@ pub fn classify(
         },
     };
     Some((kind, grid))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{generate, shapes, EdgeCrease, Options, VertexCorner};
+    use crate::refine::step;
+
+    /// Wherever [`interior_points`] gives a face's points, [`classify`] gives the same points
+    /// (each a vertex alone) as an interior B-spline patch; and it gives them for every face of
+    /// a grid whose corners are all interior: on level 0 and level 1 of meshes with boundaries,
+    /// holes, n-gons (one among quads of valence-4 corners), extraordinary vertices,
+    /// semi-sharp and infinitely sharp creases and a semi-sharp corner.
+    #[test]
+    fn interior_points_are_classify_s() {
+        let mut creased = generate::grid(8);
+        creased.holes = vec![20];
+        creased.creases = vec![
+            EdgeCrease {
+                v0: 30,
+                v1: 31,
+                sharpness: 2.0,
+            },
+            EdgeCrease {
+                v0: 50,
+                v1: 59,
+                sharpness: 10.0,
+            },
+        ];
+        creased.corners = vec![VertexCorner {
+            vertex: 40,
+            sharpness: 1.5,
+        }];
+        // Faces 14 and 15 of a 6 x 6 grid made one hexagon: quads around it have valence-4
+        // corners with a face that is not a quad.
+        let mut hexagon = generate::grid(6);
+        let faces: Vec<Vec<u32>> = (0..36)
+            .filter(|&f| f != 15)
+            .map(|f| {
+                if f == 14 {
+                    vec![16, 23, 24, 25, 18, 17]
+                } else {
+                    hexagon.face(f).to_vec()
+                }
+            })
+            .collect();
+        hexagon.face_offsets = std::iter::once(0)
+            .chain(faces.iter().scan(0, |n, f| {
+                *n += f.len() as u32;
+                Some(*n)
+            }))
+            .collect();
+        hexagon.face_verts = faces.concat();
+        let meshes = [
+            generate::grid(6),
+            creased,
+            hexagon,
+            generate::star(5, 3),
+            shapes::gear(7),
+            shapes::rounded_box(2.0),
+            shapes::blob(),
+        ];
+        let (mut taken, mut refused) = (0, 0);
+        for (i, mesh) in meshes.iter().enumerate() {
+            let (base, _) = Level::base(mesh, &Options::default()).unwrap();
+            let (child, _) = step::refine(&base, mesh.options.crease_method);
+            for level in [&base, &child] {
+                for f in 0..level.num_faces() {
+                    let Some(points) = interior_points(level, f) else {
+                        refused += 1;
+                        continue;
+                    };
+                    let (kind, cps) = classify(level, f, true).expect("a regular face");
+                    assert_eq!(
+                        kind,
+                        RegularKind::BSpline { closed: 0 },
+                        "mesh {i} face {f}"
+                    );
+                    assert_eq!(cps, points.map(Combo::one), "mesh {i} face {f}");
+                    taken += 1;
+                }
+            }
+        }
+        assert!(
+            taken > 500 && refused > 100,
+            "taken {taken}, refused {refused}"
+        );
+        // A 6 x 6 grid: the 4 x 4 faces away from its boundary, and no other.
+        let (grid, _) = Level::base(&meshes[0], &Options::default()).unwrap();
+        let inside: Vec<usize> = (0..36)
+            .filter(|&f| interior_points(&grid, f).is_some())
+            .collect();
+        let want: Vec<usize> = (1..5)
+            .flat_map(|i| (1..5).map(move |j| 6 * i + j))
+            .collect();
+        assert_eq!(inside, want);
+    }
 }

@@ -11,7 +11,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, Options, Scheme};
 use crate::patch::approx::{Approximation, QuadApprox, TriApprox};
 use crate::patch::local::{child_face, extract_faces, extract_faces_within};
-use crate::patch::regular::{classify, RegularKind};
+use crate::patch::regular::{classify, interior_points, RegularKind};
 use crate::patch::stam;
 use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
@@ -440,6 +440,19 @@ fn decide(
     }
     if forced {
         return Found::Irregular;
+    }
+    // The common case first, with no combinations built: a regular interior face, whose
+    // control points are vertices as they are (what `classify` gives it, below).
+    if let Some(points) = interior_points(level, g) {
+        let kind = RegularKind::BSpline { closed: 0 };
+        if depth == 0 {
+            part.direct.extend_from_slice(&points);
+            return Found::Direct(kind);
+        }
+        for &v in &points {
+            part.push_row([(v, 1.0)]);
+        }
+        return Found::Regular(kind);
     }
     if let Some((kind, cps)) = classify(level, g, single_crease) {
         // Control points that are vertices as they are are read from the vertices, at level
