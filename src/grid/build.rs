@@ -17,7 +17,9 @@ use crate::oct::oct_encode_all;
 use crate::patch::PatchTable;
 use crate::threads::split_off;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Where a planned block starts in its region's grid (its header is apart, in
 /// [`GridMesh::blocks`]).
@@ -136,14 +138,49 @@ struct BlockSlices<'a> {
     levels: &'a mut [u8],
 }
 
-impl<'a> BlockSlices<'a> {
+/// [`BlockSlices`] not yet initialised: the arrays' spare capacity, each block's part cleared
+/// by the worker that stores the block, just before it writes it ([`Self::cleared`]). Cleared
+/// at allocation instead (`calloc`), the arrays cost a warm process a serial clearing of the
+/// memory the allocator kept (the car at rate 16: 6 ms for 10 MB; fresh pages are zero and
+/// cost nothing until written, which is why the cold builds never showed it).
+#[derive(Default)]
+struct Spare<'a> {
+    coords: &'a mut [MaybeUninit<f32>],
+    normals: &'a mut [MaybeUninit<u32>],
+    boxes: &'a mut [MaybeUninit<Box4>],
+    levels: &'a mut [MaybeUninit<u8>],
+}
+
+/// Zeroes `items` and gives them as initialised.
+fn zeroed<T: bytemuck::Zeroable>(items: &mut [MaybeUninit<T>]) -> &mut [T] {
+    // SAFETY: all-zero bytes are a valid `T` (`Zeroable`); once they are written, every item
+    // is initialised and the slice may be seen as `[T]`, with the same layout.
+    unsafe {
+        std::ptr::write_bytes(items.as_mut_ptr(), 0, items.len());
+        &mut *(items as *mut [MaybeUninit<T>] as *mut [T])
+    }
+}
+
+impl<'a> Spare<'a> {
     /// The first `e` of each; `self` keeps the rest.
-    fn split_off(&mut self, e: Extent) -> BlockSlices<'a> {
-        BlockSlices {
+    fn split_off(&mut self, e: Extent) -> Spare<'a> {
+        Spare {
             coords: split_off(&mut self.coords, e.coords),
             normals: split_off(&mut self.normals, e.coords / 3),
             boxes: split_off(&mut self.boxes, e.boxes),
             levels: split_off(&mut self.levels, e.levels),
+        }
+    }
+
+    /// The slices zeroed, counted in `cleared` (items of the four arrays together).
+    fn cleared(self, cleared: &AtomicUsize) -> BlockSlices<'a> {
+        let n = self.coords.len() + self.normals.len() + self.boxes.len() + self.levels.len();
+        cleared.fetch_add(n, Ordering::Relaxed);
+        BlockSlices {
+            coords: zeroed(self.coords),
+            normals: zeroed(self.normals),
+            boxes: zeroed(self.boxes),
+            levels: zeroed(self.levels),
         }
     }
 }
@@ -204,7 +241,18 @@ struct RunStore<'a> {
     base: Extent,
     plans: &'a [Planned],
     headers: &'a mut [Block],
-    out: BlockSlices<'a>,
+    out: Spare<'a>,
+    /// Items of the mesh's arrays cleared so far, by every run ([`Planning::finish`] checks
+    /// that they add up to the arrays' lengths).
+    cleared: &'a AtomicUsize,
+}
+
+impl Drop for RunStore<'_> {
+    /// Clears what no block took (nothing, unless a run stopped early): every item of the
+    /// arrays is initialised once every store is gone.
+    fn drop(&mut self) {
+        std::mem::take(&mut self.out).cleared(self.cleared);
+    }
 }
 
 impl RunStore<'_> {
@@ -220,7 +268,7 @@ impl RunStore<'_> {
         self.plans = rest;
         for (p, h) in plans.iter().zip(split_off(&mut self.headers, n)) {
             self.base.offset(h);
-            let mine = self.out.split_off(Extent::of(h));
+            let mine = self.out.split_off(Extent::of(h)).cleared(self.cleared);
             h.root = fill_block(s, p.origin, h, mine);
         }
     }
@@ -232,7 +280,13 @@ impl RunStore<'_> {
 struct Planning {
     plans: Vec<Planned>,
     headers: Vec<Block>,
+    /// The mesh, its block arrays allocated but empty until [`Self::finish`] (their items
+    /// are cleared and written by the stores).
     mesh: GridMesh,
+    /// What the blocks take, all together.
+    total: Extent,
+    /// Items of the block arrays cleared by the stores.
+    cleared: AtomicUsize,
 }
 
 impl Planning {
@@ -277,20 +331,24 @@ impl Planning {
             .collect();
         let total = extents.iter().fold(Extent::default(), |a, &e| a.add(e));
         let m = &mut self.mesh;
+        self.total = total;
+        *self.cleared.get_mut() = 0;
         // Window rows are read four values at a time: the last plane's last row reads past it
-        // into four zeros.
-        m.coords = vec![0.0; total.coords + 4];
-        m.normals = vec![0; total.coords / 3];
-        // Zeroed, not empty boxes: every block overwrites all of its slice (and a zeroed
-        // allocation's pages are first touched by the block that writes them, in parallel).
-        m.boxes = bytemuck::zeroed_vec(total.boxes);
-        m.levels = vec![0; total.levels];
-        let mut rest = BlockSlices {
-            coords: &mut m.coords[..total.coords],
-            normals: &mut m.normals[..],
-            boxes: &mut m.boxes[..],
-            levels: &mut m.levels[..],
+        // into four zeros (written now, with the arrays' lengths, in `finish`).
+        m.coords = Vec::with_capacity(total.coords + 4);
+        for z in &mut m.coords.spare_capacity_mut()[total.coords..] {
+            z.write(0.0);
+        }
+        m.normals = Vec::with_capacity(total.coords / 3);
+        m.boxes = Vec::with_capacity(total.boxes);
+        m.levels = Vec::with_capacity(total.levels);
+        let mut rest = Spare {
+            coords: &mut m.coords.spare_capacity_mut()[..total.coords],
+            normals: &mut m.normals.spare_capacity_mut()[..total.coords / 3],
+            boxes: &mut m.boxes.spare_capacity_mut()[..total.boxes],
+            levels: &mut m.levels.spare_capacity_mut()[..total.levels],
         };
+        let cleared = &self.cleared;
         let (mut p, mut h) = (&self.plans[..], &mut self.headers[..]);
         let mut base = Extent::default();
         let mut stores = Vec::with_capacity(runs.len());
@@ -302,6 +360,7 @@ impl Planning {
                 plans,
                 headers: split_off(&mut h, n),
                 out: rest.split_off(e),
+                cleared,
             });
             base = base.add(e);
         }
@@ -315,8 +374,33 @@ impl Planning {
         let Planning {
             headers,
             mesh: mut m,
+            total,
+            cleared,
             ..
         } = self;
+        // Every item of the block arrays was cleared (by its block, or by its store when it
+        // was dropped), then written by its block.
+        let items = total.coords + total.coords / 3 + total.boxes + total.levels;
+        assert_eq!(
+            cleared.into_inner(),
+            items,
+            "every block array item is cleared before the arrays are read"
+        );
+        assert!(
+            m.coords.capacity() >= total.coords + 4
+                && m.normals.capacity() >= total.coords / 3
+                && m.boxes.capacity() >= total.boxes
+                && m.levels.capacity() >= total.levels,
+            "the block arrays are allocated before they are read"
+        );
+        // SAFETY: each array's first items (and the coordinates' four padding zeros) are
+        // initialised, as just checked; the capacities were allocated for these lengths.
+        unsafe {
+            m.coords.set_len(total.coords + 4);
+            m.normals.set_len(total.coords / 3);
+            m.boxes.set_len(total.boxes);
+            m.levels.set_len(total.levels);
+        }
         if loose.len() >= 1 << 31 {
             return Err(too_many(loose.len(), "loose triangles", "2^31"));
         }
