@@ -172,10 +172,13 @@ impl<'a> Spare<'a> {
         }
     }
 
-    /// The slices zeroed, counted in `cleared` (items of the four arrays together).
-    fn cleared(self, cleared: &AtomicUsize) -> BlockSlices<'a> {
-        let n = self.coords.len() + self.normals.len() + self.boxes.len() + self.levels.len();
-        cleared.fetch_add(n, Ordering::Relaxed);
+    /// Items of the four arrays together.
+    fn len(&self) -> usize {
+        self.coords.len() + self.normals.len() + self.boxes.len() + self.levels.len()
+    }
+
+    /// The slices zeroed.
+    fn cleared(self) -> BlockSlices<'a> {
         BlockSlices {
             coords: zeroed(self.coords),
             normals: zeroed(self.normals),
@@ -242,8 +245,11 @@ struct RunStore<'a> {
     plans: &'a [Planned],
     headers: &'a mut [Block],
     out: Spare<'a>,
-    /// Items of the mesh's arrays cleared so far, by every run ([`Planning::finish`] checks
-    /// that they add up to the arrays' lengths).
+    /// Items of the run's arrays, cleared by the time the store is dropped: added then to the
+    /// mesh's count of cleared items ([`Planning::finish`] checks that every run's add up to
+    /// the arrays' lengths; once per run, not per block, where every worker's adds would
+    /// contend for one cache line).
+    items: usize,
     cleared: &'a AtomicUsize,
 }
 
@@ -251,7 +257,8 @@ impl Drop for RunStore<'_> {
     /// Clears what no block took (nothing, unless a run stopped early): every item of the
     /// arrays is initialised once every store is gone.
     fn drop(&mut self) {
-        std::mem::take(&mut self.out).cleared(self.cleared);
+        std::mem::take(&mut self.out).cleared();
+        self.cleared.fetch_add(self.items, Ordering::Relaxed);
     }
 }
 
@@ -268,7 +275,7 @@ impl RunStore<'_> {
         self.plans = rest;
         for (p, h) in plans.iter().zip(split_off(&mut self.headers, n)) {
             self.base.offset(h);
-            let mine = self.out.split_off(Extent::of(h)).cleared(self.cleared);
+            let mine = self.out.split_off(Extent::of(h)).cleared();
             h.root = fill_block(s, p.origin, h, mine);
         }
     }
@@ -355,11 +362,13 @@ impl Planning {
         for (&n, &e) in counts.iter().zip(&extents) {
             let (plans, after) = p.split_at(n);
             p = after;
+            let out = rest.split_off(e);
             stores.push(RunStore {
                 base,
                 plans,
                 headers: split_off(&mut h, n),
-                out: rest.split_off(e),
+                items: out.len(),
+                out,
                 cleared,
             });
             base = base.add(e);
