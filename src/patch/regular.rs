@@ -115,6 +115,33 @@ fn reflect(grid: &[Combo; 16], on: usize, inside: usize) -> Combo {
     out
 }
 
+/// The two vertices of the quad across edge `k` of quad `f` (corners `fv`) that are not on
+/// the edge: the one next to corner `k + 1`, then the one next to corner `k` (grid positions
+/// `C[k] − V[k]` and `C[k+1] − V[k]`); `None` when no other face holds the edge as a quad
+/// running the other way.
+fn across(topo: &crate::mesh::Topology, f: usize, fv: &[u32], k: usize) -> Option<[u32; 2]> {
+    let k1 = (k + 1) % 4;
+    let g = topo
+        .edge_face_list(topo.face_edge(f, k))
+        .iter()
+        .copied()
+        .find(|&g| g as usize != f)? as usize;
+    let gv = topo.face_vertices(g);
+    // In g the edge runs v_{k+1} -> v_k.
+    let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
+    Some([gv[(m + 2) % 4], gv[(m + 3) % 4]])
+}
+
+/// The vertex diagonally opposite corner vertex `v` of quad `f`, in the face opposite `f`
+/// around `v` (an interior valence-4 ring).
+fn diagonal(topo: &crate::mesh::Topology, f: usize, v: usize) -> Option<u32> {
+    let (faces, corners) = (topo.vertex_faces(v), topo.vertex_face_corners(v));
+    let ci = faces.iter().position(|&g| g as usize == f)?;
+    let oi = (ci + 2) % 4;
+    let gv = topo.face_vertices(faces[oi] as usize);
+    Some(gv[(corners[oi] as usize + 2) % 4])
+}
+
 /// The sixteen control points of face `f` of `level` when it is an interior B-spline patch
 /// whose every corner is a smooth valence-4 vertex of quads with nothing sharp around it,
 /// as vertex indices in grid order; `None` otherwise, whatever [`classify`] makes of the face.
@@ -154,23 +181,10 @@ pub fn interior_points(level: &Level, f: usize) -> Option<[u32; 16]> {
             return None;
         }
         grid[at(C[k])] = fv[k];
-        // The neighbour across edge k, where the edge runs v_{k+1} -> v_k.
-        let g = topo
-            .edge_face_list(e)
-            .iter()
-            .copied()
-            .find(|&g| g as usize != f)? as usize;
-        let gv = topo.face_vertices(g);
-        let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
-        grid[at(sub(C[k], V[k]))] = gv[(m + 2) % 4];
-        grid[at(sub(C[k1], V[k]))] = gv[(m + 3) % 4];
-        // The diagonal at corner k: the face opposite f around v_k.
-        let v = fv[k] as usize;
-        let (faces, corners) = (topo.vertex_faces(v), topo.vertex_face_corners(v));
-        let ci = faces.iter().position(|&g| g as usize == f)?;
-        let oi = (ci + 2) % 4;
-        let gv = topo.face_vertices(faces[oi] as usize);
-        grid[at(sub(sub(C[k], U[k]), V[k]))] = gv[(corners[oi] as usize + 2) % 4];
+        let [x, y] = across(topo, f, fv, k)?;
+        grid[at(sub(C[k], V[k]))] = x;
+        grid[at(sub(C[k1], V[k]))] = y;
+        grid[at(sub(sub(C[k], U[k]), V[k]))] = diagonal(topo, f, fv[k] as usize)?;
     }
     Some(grid)
 }
@@ -341,17 +355,9 @@ pub fn classify(
         let x = sub(C[k], V[k]);
         let y = sub(C[k1], V[k]);
         if open[k] {
-            let e = fe[k];
-            let g = topo
-                .edge_face_list(e)
-                .iter()
-                .copied()
-                .find(|&g| g as usize != f)? as usize;
-            let gv = topo.face_vertices(g);
-            // in g the edge runs v_{k+1} -> v_k
-            let m = (0..4).find(|&i| gv[i] == fv[k1] && gv[(i + 1) % 4] == fv[k])?;
-            grid[at(x)] = Combo::one(gv[(m + 2) % 4]);
-            grid[at(y)] = Combo::one(gv[(m + 3) % 4]);
+            let [a, b] = across(topo, f, fv, k)?;
+            grid[at(x)] = Combo::one(a);
+            grid[at(y)] = Combo::one(b);
         }
     }
     for k in 0..4 {
@@ -368,14 +374,7 @@ pub fn classify(
         let d = sub(sub(C[k], U[k]), V[k]);
         let (ol, ot) = (open[k], open[(k + 3) % 4]);
         if ol && ot {
-            let v = fv[k] as usize;
-            let faces = topo.vertex_faces(v);
-            let corners = topo.vertex_face_corners(v);
-            let ci = faces.iter().position(|&g| g as usize == f)?;
-            let oi = (ci + 2) % 4;
-            let g = faces[oi] as usize;
-            let gv = topo.face_vertices(g);
-            grid[at(d)] = Combo::one(gv[(corners[oi] as usize + 2) % 4]);
+            grid[at(d)] = Combo::one(diagonal(topo, f, fv[k] as usize)?);
         } else if !ol {
             // lead edge closed: reflect across it (along V)
             grid[at(d)] = reflect(&grid, at(add(d, V[k])), at(add(add(d, V[k]), V[k])));
