@@ -131,8 +131,11 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
         Topology::from_edges(nv + ne, face_offsets, face_verts, face_edges, edge_verts);
 
     let halves = edge_halves(parent, method);
-    let (edge_sharpness, vertex_sharpness) =
-        child_tags(&parent.vertex_sharpness, &halves, &child_topo);
+    let (edge_sharpness, vertex_sharpness) = child_tags(
+        &parent.vertex_sharpness,
+        &halves,
+        [child_topo.num_edges(), child_topo.num_vertices],
+    );
 
     let vertex_rows = vertex_rows(
         parent,

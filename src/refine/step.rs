@@ -96,18 +96,19 @@ pub(super) fn half_edge(topo: &Topology, e: u32, v: u32, lead: bool) -> u32 {
 /// The child level's edge and vertex sharpness, for children numbered as both schemes number
 /// them: parent edge `e`'s halves are child edges `2e` and `2e + 1` (sharpness from `halves`,
 /// every other child edge smooth), parent vertex `v`'s child is vertex `v` (its sharpness,
-/// `parent_vertex_sharpness[v]`, decremented; every other child vertex smooth).
+/// `parent_vertex_sharpness[v]`, decremented; every other child vertex smooth); the child
+/// level has `child_edges` edges and `child_vertices` vertices.
 pub(super) fn child_tags(
     parent_vertex_sharpness: &[f32],
     halves: &[[f32; 2]],
-    child: &Topology,
+    [child_edges, child_vertices]: [usize; 2],
 ) -> (Vec<f32>, Vec<f32>) {
-    let mut edge_sharpness = vec![0.0f32; child.num_edges()];
+    let mut edge_sharpness = vec![0.0f32; child_edges];
     for (e, h) in halves.iter().enumerate() {
         edge_sharpness[2 * e] = h[0];
         edge_sharpness[2 * e + 1] = h[1];
     }
-    let mut vertex_sharpness = vec![0.0f32; child.num_vertices];
+    let mut vertex_sharpness = vec![0.0f32; child_vertices];
     for (c, &s) in vertex_sharpness.iter_mut().zip(parent_vertex_sharpness) {
         *c = crease::decrement(s);
     }
@@ -215,89 +216,105 @@ pub fn refine_inner(parent: &Level, inner: usize, method: CreaseMethod) -> (Leve
     let child_of_face = |f: usize| (nv + f) as u32;
     let child_of_edge = |e: usize| (nv + nf + e) as u32;
 
-    // Child edges, numbered structurally: parent edge e gives 2e (at its first vertex) and
-    // 2e + 1 (at its second); corner k of parent face f (face-vertex slot o + k) gives the
-    // interior edge 2·ne + o + k from the edge point of edge k to the face point.
+    // The child topology from the cut-out's first faces, and beside it the child's tags and
+    // the stencils, which read the parent alone.
     let nfv = topo.face_verts.len();
-    let mut edge_verts = Vec::with_capacity(2 * ne + nfv);
-    for e in 0..ne {
-        let [a, b] = topo.edge_verts[e];
-        let m = child_of_edge(e);
-        edge_verts.push([child_of_vertex(a as usize), m]);
-        edge_verts.push([m, child_of_vertex(b as usize)]);
-    }
-    for f in 0..nf {
-        let cf = child_of_face(f);
-        for &e in topo.face_edge_list(f) {
-            edge_verts.push([child_of_edge(e as usize), cf]);
-        }
-    }
-    let half = |e: u32, v: u32, lead: bool| half_edge(topo, e, v, lead);
+    let ((child_topo, face_hole), (edge_sharpness, vertex_sharpness, table)) = rayon::join(
+        || {
+            // Child edges, numbered structurally: parent edge e gives 2e (at its first vertex) and
+            // 2e + 1 (at its second); corner k of parent face f (face-vertex slot o + k) gives the
+            // interior edge 2·ne + o + k from the edge point of edge k to the face point.
+            let mut edge_verts = Vec::with_capacity(2 * ne + nfv);
+            for e in 0..ne {
+                let [a, b] = topo.edge_verts[e];
+                let m = child_of_edge(e);
+                edge_verts.push([child_of_vertex(a as usize), m]);
+                edge_verts.push([m, child_of_vertex(b as usize)]);
+            }
+            for f in 0..nf {
+                let cf = child_of_face(f);
+                for &e in topo.face_edge_list(f) {
+                    edge_verts.push([child_of_edge(e as usize), cf]);
+                }
+            }
+            let half = |e: u32, v: u32, lead: bool| half_edge(topo, e, v, lead);
 
-    // Child faces: quad k of face f is (v_k, edge point k, face point, edge point k-1).
-    let mut face_offsets = Vec::with_capacity(nfv + 1);
-    let mut face_verts = Vec::with_capacity(nfv * 4);
-    let mut face_edges = Vec::with_capacity(nfv * 4);
-    let mut face_hole = Vec::with_capacity(nfv);
-    face_offsets.push(0u32);
-    for f in 0..nf {
-        let fv = topo.face_vertices(f);
-        let fe = topo.face_edge_list(f);
-        let o = topo.face_offsets[f];
-        let n = fv.len();
-        for k in 0..n {
-            let prev = (k + n - 1) % n;
-            face_verts.extend_from_slice(&[
-                child_of_vertex(fv[k] as usize),
-                child_of_edge(fe[k] as usize),
-                child_of_face(f),
-                child_of_edge(fe[prev] as usize),
-            ]);
-            face_edges.extend_from_slice(&[
-                half(fe[k], fv[k], true),
-                (2 * ne) as u32 + o + k as u32,
-                (2 * ne) as u32 + o + prev as u32,
-                half(fe[prev], fv[k], false),
-            ]);
-            face_offsets.push(face_verts.len() as u32);
-            face_hole.push(parent.face_hole[f]);
-        }
-    }
-    let child_topo = child_topology(topo, face_offsets, face_verts, face_edges, edge_verts);
+            // Child faces: quad k of face f is (v_k, edge point k, face point, edge point k-1).
+            let mut face_offsets = Vec::with_capacity(nfv + 1);
+            let mut face_verts = Vec::with_capacity(nfv * 4);
+            let mut face_edges = Vec::with_capacity(nfv * 4);
+            let mut face_hole = Vec::with_capacity(nfv);
+            face_offsets.push(0u32);
+            for f in 0..nf {
+                let fv = topo.face_vertices(f);
+                let fe = topo.face_edge_list(f);
+                let o = topo.face_offsets[f];
+                let n = fv.len();
+                for k in 0..n {
+                    let prev = (k + n - 1) % n;
+                    face_verts.extend_from_slice(&[
+                        child_of_vertex(fv[k] as usize),
+                        child_of_edge(fe[k] as usize),
+                        child_of_face(f),
+                        child_of_edge(fe[prev] as usize),
+                    ]);
+                    face_edges.extend_from_slice(&[
+                        half(fe[k], fv[k], true),
+                        (2 * ne) as u32 + o + k as u32,
+                        (2 * ne) as u32 + o + prev as u32,
+                        half(fe[prev], fv[k], false),
+                    ]);
+                    face_offsets.push(face_verts.len() as u32);
+                    face_hole.push(parent.face_hole[f]);
+                }
+            }
+            let child = child_topology(topo, face_offsets, face_verts, face_edges, edge_verts);
+            (child, face_hole)
+        },
+        || {
+            // Sharpness and stencils from the whole parent (its vertices are the stencils' inputs).
+            let halves = edge_halves(parent, method);
+            let (edge_sharpness, vertex_sharpness) = child_tags(
+                &parent.vertex_sharpness[..nv],
+                &halves[..ne],
+                [2 * ne + nfv, nv + nf + ne],
+            );
+            let topo = &parent.topo;
+            let inputs = parent.num_vertices();
 
-    // Sharpness and stencils from the whole parent (its vertices are the stencils' inputs).
-    let halves = edge_halves(parent, method);
-    let (edge_sharpness, vertex_sharpness) =
-        child_tags(&parent.vertex_sharpness[..nv], &halves[..ne], &child_topo);
-    let topo = &parent.topo;
-    let inputs = parent.num_vertices();
-
-    // Stencils: vertex children, face points, edge points.
-    let vertex_rows = vertex_rows(parent, nv, &halves, &vertex_sharpness, vertex_mask);
-    let face_rows = parallel_rows(nf, inputs, |f, acc| {
-        face_mask(acc, topo.face_vertices(f), 1.0)
-    });
-    let edge_rows = parallel_rows_with(ne, inputs, |e, acc, faces: &mut Vec<&[u32]>| {
-        let [a, b] = topo.edge_verts[e];
-        faces.clear();
-        faces.extend(
-            topo.edge_face_list(e as u32)
-                .iter()
-                .map(|&f| topo.face_vertices(f as usize)),
-        );
-        let [h0, h1] = halves[e];
-        edge_mask(
-            acc,
-            a,
-            b,
-            faces,
-            parent.edge_sharpness[e],
-            crease::is_sharp(h0) && crease::is_sharp(h1),
-            parent.smooth_triangles,
-        );
-    });
-    let table = StencilTable::concat(inputs, [&vertex_rows, &face_rows, &edge_rows]);
-
+            // Stencils: vertex children, face points, edge points.
+            let vertex_rows = vertex_rows(parent, nv, &halves, &vertex_sharpness, vertex_mask);
+            let face_rows = parallel_rows(nf, inputs, |f, acc| {
+                face_mask(acc, topo.face_vertices(f), 1.0)
+            });
+            let edge_rows = parallel_rows_with(ne, inputs, |e, acc, faces: &mut Vec<&[u32]>| {
+                let [a, b] = topo.edge_verts[e];
+                faces.clear();
+                faces.extend(
+                    topo.edge_face_list(e as u32)
+                        .iter()
+                        .map(|&f| topo.face_vertices(f as usize)),
+                );
+                let [h0, h1] = halves[e];
+                edge_mask(
+                    acc,
+                    a,
+                    b,
+                    faces,
+                    parent.edge_sharpness[e],
+                    crease::is_sharp(h0) && crease::is_sharp(h1),
+                    parent.smooth_triangles,
+                );
+            });
+            let table = StencilTable::concat(inputs, [&vertex_rows, &face_rows, &edge_rows]);
+            (edge_sharpness, vertex_sharpness, table)
+        },
+    );
+    assert_eq!(
+        (child_topo.num_edges(), child_topo.num_vertices),
+        (edge_sharpness.len(), vertex_sharpness.len()),
+        "the child's tags are sized as its topology"
+    );
     (
         Level {
             topo: child_topo,
