@@ -201,6 +201,10 @@ pub fn refine(parent: &Level, method: CreaseMethod) -> (Level, StencilTable) {
 /// Adaptive refinement cuts two rings of faces out around the faces it isolates, which keeps
 /// every point of the next level exact, but refines only the first ring: the next level's
 /// two rings around the isolated faces' children lie within it.
+///
+/// The child topology and the child's tags and stencils read only the parent, not each other:
+/// they are built side by side (`rayon::join`; a cut-out's level is too small for its rows'
+/// chunks to keep two threads busy, so serially each waited on the other).
 pub fn refine_inner(parent: &Level, inner: usize, method: CreaseMethod) -> (Level, StencilTable) {
     let own;
     let topo = if inner >= parent.num_faces() {
