@@ -213,7 +213,8 @@ fn solve(bvh2: &Bvh2, first: usize, i: usize, part: &mut Part) -> bool {
 /// outside its range is left to the serial pass.
 fn subtree_ranges(bvh2: &Bvh2, most: usize) -> Vec<std::ops::Range<usize>> {
     let nodes = &bvh2.nodes;
-    if nodes.len() < 2 * most || nodes[0].prim_count != 0 || nodes[0].first_index != 1 {
+    if nodes.len() < most.saturating_mul(2) || nodes[0].prim_count != 0 || nodes[0].first_index != 1
+    {
         return Vec::new();
     }
     // (range of descendants, the node they descend from); only ranges that may be split.
