@@ -24,6 +24,7 @@ mod binned;
 pub mod block;
 mod build;
 pub mod collapse;
+mod emit;
 pub mod node;
 pub mod top;
 pub mod window;

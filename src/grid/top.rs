@@ -1,6 +1,7 @@
 //! The top level over grid blocks and loose triangles: an 8-wide BVH collapsed from a binary
 //! tree of binned surface-area-heuristic splits (`binned.rs`; the collapse of least
-//! total node area, [`super::collapse`]), with exact `f32` child boxes ([`Box8`]) and an
+//! total node area, [`super::collapse`]; its nodes emitted subtree by subtree in parallel,
+//! `emit.rs`), with exact `f32` child boxes ([`Box8`]) and an
 //! ordered, distance-culled stack traversal. Eight children per node halve the levels a ray walks
 //! against a 4-wide tree, and one AVX2 test (or two SSE2 halves) tests all eight boxes.
 //!
@@ -34,7 +35,7 @@ pub struct Node8 {
 }
 
 impl Node8 {
-    const EMPTY: Node8 = Node8 {
+    pub(super) const EMPTY: Node8 = Node8 {
         boxes: Box8 {
             lo: [[f32::INFINITY; WIDTH]; 3],
             hi: [[f32::NEG_INFINITY; WIDTH]; 3],
@@ -96,63 +97,18 @@ impl Top {
             };
         }
         let bvh2 = super::binned::build(boxes);
-        let mut top = Top {
-            nodes: Vec::with_capacity(bvh2.nodes.len() / 3 + 1),
-            root: 0,
-            depth: 0,
-            stack: 0,
-        };
-        // The collapse: each entry is a binary node to become an 8-wide node at `slot`.
         crate::stages::mark("grid: top-level binning");
         let collapse = Collapse::new(&bvh2);
-        let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, 1)];
-        top.nodes.push(Node8::EMPTY);
-        let mut kids = Vec::with_capacity(WIDTH);
-        while let Some((bin, slot, level)) = work.pop() {
-            top.depth = top.depth.max(level);
-            collapse.children_into(bin, &mut kids);
-            let mut refs = [EMPTY; WIDTH];
-            let mut len = 0;
-            for &k in &kids {
-                let node = &bvh2.nodes[k];
-                if node.is_leaf() {
-                    for i in 0..node.prim_count {
-                        assert!(len < WIDTH, "a leaf holds one primitive");
-                        refs[len] = LEAF | bvh2.primitive_indices[(node.first_index + i) as usize];
-                        len += 1;
-                    }
-                } else {
-                    let idx = top.nodes.len();
-                    top.nodes.push(Node8::EMPTY);
-                    assert!(len < WIDTH, "at most eight children");
-                    refs[len] = idx as Ref;
-                    len += 1;
-                    work.push((k, idx, level + 1));
-                }
-            }
-            top.nodes[slot].child = refs;
-        }
         crate::stages::mark("grid: top-level collapse");
-        // Exact boxes, children before parents (children are pushed after their parent).
-        let mut content = vec![NONE; top.nodes.len()];
-        for n in (0..top.nodes.len()).rev() {
-            let mut node = top.nodes[n];
-            for c in 0..WIDTH {
-                let r = node.child[c];
-                let b = if r == EMPTY {
-                    continue;
-                } else if r & LEAF != 0 {
-                    boxes[(r & !LEAF) as usize]
-                } else {
-                    assert!(r as usize > n, "children follow their parents");
-                    content[r as usize]
-                };
-                node.boxes.include(c, b[0]);
-                node.boxes.include(c, b[1]);
-                content[n] = union(content[n], b);
-            }
-            top.nodes[n] = node;
-        }
+        // The 8-wide nodes with their exact boxes, emitted in blocks side by side (`emit.rs`),
+        // and the stack bound: the stage still named for the boxes it ends with.
+        let (nodes, depth) = super::emit::nodes(&bvh2, &collapse, boxes);
+        let mut top = Top {
+            nodes,
+            root: 0,
+            depth,
+            stack: 0,
+        };
         top.stack = top.stack_need();
         crate::stages::mark("grid: top-level boxes");
         top
