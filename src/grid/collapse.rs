@@ -13,6 +13,7 @@
 //! `cost(n, i)` does not grow with `i`, so a spread over `i` slots never needs fewer.
 
 use crate::prefetch;
+use crate::threads::split_off;
 use obvhs::bvh2::Bvh2;
 
 /// Slots of a node.
@@ -65,10 +66,10 @@ impl<'a> Collapse<'a> {
                 parts.push((
                     r.start,
                     Part {
-                        cost: &mut take(&mut c, skip + len)[skip..],
-                        split: &mut take(&mut s, skip + len)[skip..],
-                        spread: &mut take(&mut p, skip + len)[skip..],
-                        done: &mut take(&mut d, skip + len)[skip..],
+                        cost: &mut split_off(&mut c, skip + len)[skip..],
+                        split: &mut split_off(&mut s, skip + len)[skip..],
+                        spread: &mut split_off(&mut p, skip + len)[skip..],
+                        done: &mut split_off(&mut d, skip + len)[skip..],
                     },
                 ));
                 at = r.end;
@@ -157,13 +158,6 @@ struct Part<'p> {
     split: &'p mut [[u8; SLOTS]],
     spread: &'p mut [u8],
     done: &'p mut [bool],
-}
-
-/// The first `n` items of `rest`, which keeps the others.
-fn take<'p, T>(rest: &mut &'p mut [T], n: usize) -> &'p mut [T] {
-    let (head, tail) = std::mem::take(rest).split_at_mut(n);
-    *rest = tail;
-    head
 }
 
 /// Solves node `first + i` of `bvh2` into `part` (whose arrays start at node `first`) if its
