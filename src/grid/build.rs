@@ -130,19 +130,13 @@ fn too_many(count: usize, what: &str, most: &str) -> Error {
     )
 }
 
-/// Where blocks' data goes: slices of [`GridMesh::coords`], `normals`, `boxes` and `levels`.
-struct BlockSlices<'a> {
-    coords: &'a mut [f32],
-    normals: &'a mut [u32],
-    boxes: &'a mut [Box4],
-    levels: &'a mut [u8],
-}
-
-/// [`BlockSlices`] not yet initialised: the arrays' spare capacity, each block's part cleared
-/// by the worker that stores the block, just before it writes it ([`Self::cleared`]). Cleared
-/// at allocation instead (`calloc`), the arrays cost a warm process a serial clearing of the
-/// memory the allocator kept (the car at rate 16: 6 ms for 10 MB; fresh pages are zero and
-/// cost nothing until written, which is why the cold builds never showed it).
+/// Where blocks' data goes: [`GridMesh::coords`], `normals`, `boxes` and `levels`, their
+/// spare capacity, not yet initialised. Each block's part is written item by item by the
+/// worker that stores the block ([`fill_block`], every item once); a run's part no block took
+/// is cleared when its store is dropped. Cleared first instead (at allocation, `calloc`, or
+/// block by block before the block is written), the arrays cost a second pass over memory
+/// the first touches make slow: on the 316² grid at rate 4, clearing took 13% of a
+/// one-thread build, its page faults included.
 #[derive(Default)]
 struct Spare<'a> {
     coords: &'a mut [MaybeUninit<f32>],
@@ -151,14 +145,10 @@ struct Spare<'a> {
     levels: &'a mut [MaybeUninit<u8>],
 }
 
-/// Zeroes `items` and gives them as initialised.
-fn zeroed<T: bytemuck::Zeroable>(items: &mut [MaybeUninit<T>]) -> &mut [T] {
-    // SAFETY: all-zero bytes are a valid `T` (`Zeroable`); once they are written, every item
-    // is initialised and the slice may be seen as `[T]`, with the same layout.
-    unsafe {
-        std::ptr::write_bytes(items.as_mut_ptr(), 0, items.len());
-        &mut *(items as *mut [MaybeUninit<T>] as *mut [T])
-    }
+/// Zeroes `items` (now initialised).
+fn clear<T: bytemuck::Zeroable>(items: &mut [MaybeUninit<T>]) {
+    // SAFETY: writes `items.len()` zeroed values within the slice.
+    unsafe { std::ptr::write_bytes(items.as_mut_ptr(), 0, items.len()) }
 }
 
 impl<'a> Spare<'a> {
@@ -177,14 +167,12 @@ impl<'a> Spare<'a> {
         self.coords.len() + self.normals.len() + self.boxes.len() + self.levels.len()
     }
 
-    /// The slices zeroed.
-    fn cleared(self) -> BlockSlices<'a> {
-        BlockSlices {
-            coords: zeroed(self.coords),
-            normals: zeroed(self.normals),
-            boxes: zeroed(self.boxes),
-            levels: zeroed(self.levels),
-        }
+    /// Clears every item.
+    fn clear(self) {
+        clear(self.coords);
+        clear(self.normals);
+        clear(self.boxes);
+        clear(self.levels);
     }
 }
 
@@ -198,38 +186,60 @@ struct Source<'a, P, L> {
     level: L,
 }
 
-/// Stores the block of header `h` starting at `origin` in its region into `out`; returns its
-/// root node.
-fn fill_block<P, L>(s: &Source<P, L>, origin: [u32; 2], h: &Block, out: BlockSlices) -> Box4
+/// Stores the block of header `h` starting at `origin` in its region into `out` (its
+/// [`Extent::of`]), writing each item once; returns its root node.
+fn fill_block<P, L>(s: &Source<P, L>, origin: [u32; 2], h: &Block, out: Spare) -> Box4
 where
     P: Fn(u32) -> ([f32; 3], u32),
     L: Fn(u32) -> u8,
 {
     let (cols, rows) = (h.cols as usize, h.rows as usize);
     let [x0, y0] = origin.map(|x| x as usize);
-    let mut row = [0u32; BLOCK + 1];
-    let row = &mut row[..=cols];
     let w = cols + 1;
-    let planes = out.coords[..3 * w * (rows + 1)].chunks_exact_mut(3 * w);
+    let levels = if s.g.level.is_some() {
+        0
+    } else {
+        2 * rows * cols
+    };
+    // What `Extent::of(h)` gives, as the loops below cover it.
+    assert!(
+        out.coords.len() == 3 * w * (rows + 1)
+            && out.normals.len() == w * (rows + 1)
+            && out.boxes.len() == if h.two_level() { 4 } else { 0 }
+            && out.levels.len() == levels,
+        "a block's storage is its extent"
+    );
+    let mut row = [0u32; BLOCK + 1];
+    let row = &mut row[..w];
+    let planes = out.coords.chunks_exact_mut(3 * w);
     for ((y, plane), codes) in planes.enumerate().zip(out.normals.chunks_exact_mut(w)) {
         s.g.row_vertices(s.frames, x0 as u32, (y0 + y) as u32, row);
         let (xs, yz) = plane.split_at_mut(w);
         let (ys, zs) = yz.split_at_mut(w);
         for ((((&v, px), py), pz), c) in row.iter().zip(xs).zip(ys).zip(zs).zip(codes) {
             let (q, code) = (s.point)(v);
-            (*px, *py, *pz, *c) = (q[0], q[1], q[2], code);
+            px.write(q[0]);
+            py.write(q[1]);
+            pz.write(q[2]);
+            c.write(code);
         }
     }
-    let root = plane_boxes(h, out.coords, out.boxes);
-    match s.g.level {
-        // One patch: one level, in the header (the triangles' records are not read).
-        Some(_) => debug_assert!(out.levels.is_empty()),
-        None => {
-            for y in 0..rows {
-                for x in 0..cols {
-                    for k in 0..2 {
-                        out.levels[2 * (y * cols + x) + k] = (s.level)(h.triangle(x, y, k));
-                    }
+    // SAFETY: the planes (`rows + 1` of `3 w` coordinates: the whole slice, as asserted) were
+    // written item by item just above, each plane's three rows of `w` from the `w` vertices
+    // of `row`; `MaybeUninit<f32>` has `f32`'s layout.
+    let coords = unsafe { &*(out.coords as *const [MaybeUninit<f32>] as *const [f32]) };
+    let mut quadrants = [Box4::default(); 4];
+    let root = plane_boxes(h, coords, &mut quadrants[..out.boxes.len()]);
+    for (b, q) in out.boxes.iter_mut().zip(quadrants) {
+        b.write(q);
+    }
+    if levels > 0 {
+        // Where the region has no one level: each triangle's (a one-patch region's level is
+        // in the header, and its triangles' records are not read).
+        for y in 0..rows {
+            for x in 0..cols {
+                for k in 0..2 {
+                    out.levels[2 * (y * cols + x) + k].write((s.level)(h.triangle(x, y, k)));
                 }
             }
         }
@@ -245,20 +255,20 @@ struct RunStore<'a> {
     plans: &'a [Planned],
     headers: &'a mut [Block],
     out: Spare<'a>,
-    /// Items of the run's arrays, cleared by the time the store is dropped: added then to the
-    /// mesh's count of cleared items ([`Planning::finish`] checks that every run's add up to
-    /// the arrays' lengths; once per run, not per block, where every worker's adds would
-    /// contend for one cache line).
+    /// Items of the run's arrays, all initialised by the time the store is dropped: added
+    /// then to the mesh's count of initialised items ([`Planning::finish`] checks that every
+    /// run's add up to the arrays' lengths; once per run, not per block, where every worker's
+    /// adds would contend for one cache line).
     items: usize,
-    cleared: &'a AtomicUsize,
+    initialised: &'a AtomicUsize,
 }
 
 impl Drop for RunStore<'_> {
     /// Clears what no block took (nothing, unless a run stopped early): every item of the
     /// arrays is initialised once every store is gone.
     fn drop(&mut self) {
-        std::mem::take(&mut self.out).cleared();
-        self.cleared.fetch_add(self.items, Ordering::Relaxed);
+        std::mem::take(&mut self.out).clear();
+        self.initialised.fetch_add(self.items, Ordering::Relaxed);
     }
 }
 
@@ -275,7 +285,7 @@ impl RunStore<'_> {
         self.plans = rest;
         for (p, h) in plans.iter().zip(split_off(&mut self.headers, n)) {
             self.base.offset(h);
-            let mine = self.out.split_off(Extent::of(h)).cleared();
+            let mine = self.out.split_off(Extent::of(h));
             h.root = fill_block(s, p.origin, h, mine);
         }
     }
@@ -288,12 +298,12 @@ struct Planning {
     plans: Vec<Planned>,
     headers: Vec<Block>,
     /// The mesh, its block arrays allocated but empty until [`Self::finish`] (their items
-    /// are cleared and written by the stores).
+    /// are written by the stores).
     mesh: GridMesh,
     /// What the blocks take, all together.
     total: Extent,
-    /// Items of the block arrays cleared by the stores.
-    cleared: AtomicUsize,
+    /// Items of the block arrays initialised by the stores.
+    initialised: AtomicUsize,
 }
 
 impl Planning {
@@ -339,7 +349,7 @@ impl Planning {
         let total = extents.iter().fold(Extent::default(), |a, &e| a.add(e));
         let m = &mut self.mesh;
         self.total = total;
-        *self.cleared.get_mut() = 0;
+        *self.initialised.get_mut() = 0;
         // Window rows are read four values at a time: the last plane's last row reads past it
         // into four zeros (written now, with the arrays' lengths, in `finish`).
         m.coords = Vec::with_capacity(total.coords + 4);
@@ -355,7 +365,7 @@ impl Planning {
             boxes: &mut m.boxes.spare_capacity_mut()[..total.boxes],
             levels: &mut m.levels.spare_capacity_mut()[..total.levels],
         };
-        let cleared = &self.cleared;
+        let initialised = &self.initialised;
         let (mut p, mut h) = (&self.plans[..], &mut self.headers[..]);
         let mut base = Extent::default();
         let mut stores = Vec::with_capacity(runs.len());
@@ -369,7 +379,7 @@ impl Planning {
                 headers: split_off(&mut h, n),
                 items: out.len(),
                 out,
-                cleared,
+                initialised,
             });
             base = base.add(e);
         }
@@ -384,16 +394,16 @@ impl Planning {
             headers,
             mesh: mut m,
             total,
-            cleared,
+            initialised,
             ..
         } = self;
-        // Every item of the block arrays was cleared (by its block, or by its store when it
-        // was dropped), then written by its block.
+        // Every item of the block arrays was initialised: written by its block, or cleared by
+        // its store when it was dropped.
         let items = total.coords + total.coords / 3 + total.boxes + total.levels;
         assert_eq!(
-            cleared.into_inner(),
+            initialised.into_inner(),
             items,
-            "every block array item is cleared before the arrays are read"
+            "every block array item is initialised before the arrays are read"
         );
         assert!(
             m.coords.capacity() >= total.coords + 4
