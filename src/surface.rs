@@ -20,6 +20,9 @@
 //! // gives z = -68/81, on the axis.
 //! let s = surface.eval(FaceCoord::quad(0, 0.5, 0.5)).expect("face 0 has a surface");
 //! assert!((s.p[2] + 68.0 / 81.0).abs() < 1e-12 && s.p[0].abs() < 1e-12 && s.p[1].abs() < 1e-12);
+//! // Its exact normal there points out of the cube, along -z (by symmetry).
+//! let n = surface.limit_normal(FaceCoord::quad(0, 0.5, 0.5)).expect("a regular point");
+//! assert!((n[2] + 1.0).abs() < 1e-12 && n[0].abs() < 1e-12 && n[1].abs() < 1e-12);
 //!
 //! // Dice it into crack-free triangles and trace a ray from the centre: it always hits.
 //! let traced = surface.bvh(&DiceOptions { rate: DiceRate::Uniform(8), ..DiceOptions::default() })?;
@@ -181,6 +184,17 @@ impl Surface {
     /// surface: a hole, or `at` outside the domain (see [`Self::try_eval`] for the reason).
     pub fn eval(&self, at: FaceCoord) -> Option<Sample> {
         self.table.eval(at).ok()
+    }
+
+    /// The exact unit limit normal at `at` (`∂P/∂u × ∂P/∂v` normalised, outward for
+    /// counter-clockwise faces): a hit's exact shading normal from its `(face, k, u, v)`, for
+    /// a grid mesh built without shading normals ([`GridMesh::dice_geometry`]). `None` where
+    /// there is no surface, or where the parametric normal vanishes (a degenerate point).
+    pub fn limit_normal(&self, at: FaceCoord) -> Option<[f64; 3]> {
+        let s = self.eval(at)?;
+        let n = crate::vec3::cross(s.du, s.dv);
+        let l = crate::vec3::norm(n);
+        (l > 0.0 && l.is_finite()).then(|| n.map(|x| x / l))
     }
 
     /// Under the Loop scheme, the surface at `(face, 0, u, v)` in OpenSubdiv's triangle

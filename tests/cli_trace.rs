@@ -149,6 +149,28 @@ fn accuracy_and_bench_print_json() {
     );
     // The leaf test the traversal ran: the one this processor gets.
     assert_eq!(v["leaf_test"], limitray::grid::window::leaf_isa());
+    // Built for tracing alone (no shading normals): the same blocks, tree and hits, and 4
+    // bytes less per block vertex (6 blocks of 5 × 5 vertices over 192 triangles: 3.125
+    // bytes per triangle; the JSON rounds each figure to 0.1).
+    assert_eq!(v["shading_normals"], true);
+    let g = bench(&["--no-shading-normals"]);
+    assert_eq!(g["shading_normals"], false);
+    for key in [
+        "triangles",
+        "blocks",
+        "top_nodes",
+        "coherent_hits",
+        "incoherent_hits",
+    ] {
+        assert_eq!(g[key], v[key], "{key}");
+    }
+    let bytes = |v: &serde_json::Value| v["bytes_per_triangle"].as_f64().unwrap();
+    assert!(
+        (bytes(&v) - bytes(&g) - 3.125).abs() < 0.11,
+        "{} vs {}",
+        bytes(&v),
+        bytes(&g)
+    );
     assert!(v.get("stages_ms").is_none());
     assert_eq!(v["warm"], 0);
     // With --stages (after two warm builds): the measured build's stages in order, table,

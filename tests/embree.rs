@@ -632,6 +632,8 @@ fn cli_crosscheck_and_bench() {
             assert!(r[key].as_f64().is_some_and(|x| x >= 0.0), "{key}: {r}");
         }
         assert!(r.get("bytes_per_triangle").is_some(), "{r}");
+        // limitray's grid core stores shading normals unless `--no-shading-normals`.
+        assert_eq!(r["shading_normals"], true, "{r}");
     }
     // The grid core: no leaks, and its bytes per triangle include every level. A closed
     // cube at rate 8 is 768 triangles in 6 blocks of 8×8 quads, about 15.5 bytes each.

@@ -298,6 +298,26 @@ fn dicing_into_the_grid_builds_the_same_grid() {
             a == b,
             "{name} {rate:?} displaced {displace}: the grid meshes differ"
         );
+        assert!(b.shading_normals && b.normals.len() == (b.coords.len() - 4) / 3);
+        // Built for tracing alone: the same mesh but for the normals, the same hits but for
+        // the shading normal, which is the geometric one.
+        let g = GridMesh::dice_geometry(&table, mesh, &opts).unwrap();
+        let mut stripped = b.clone();
+        stripped.normals.clear();
+        stripped.shading_normals = false;
+        for l in &mut stripped.loose {
+            l.n = [0; 3];
+        }
+        assert!(
+            stripped == g,
+            "{name} {rate:?} displaced {displace}: the geometry-only grid mesh differs"
+        );
+        let bounds = b.bounds();
+        for (i, ray) in random_rays(bounds, 300, 7).iter().enumerate() {
+            let want = b.intersect(ray).map(|h| Hit { ns: h.ng, ..h });
+            assert_eq!(g.intersect(ray), want, "{name}: ray {i}");
+            assert_eq!(g.occluded(ray), b.occluded(ray), "{name}: ray {i}");
+        }
         a.blocks.len()
     };
     let mut blocks = 0;

@@ -53,6 +53,10 @@ pub struct TraceBenchArgs {
     /// to the build's time but for the gaps between the named stages.
     #[arg(long)]
     pub stages: bool,
+    /// Build the grid core for tracing alone, without shading normals (`GridMesh::
+    /// dice_geometry`: hits then carry the geometric normal as their shading normal).
+    #[arg(long)]
+    pub no_shading_normals: bool,
 }
 
 /// Median of wall-clock seconds of `reps` runs of `f`.
@@ -118,6 +122,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
                     max_rate: 1024,
                     displace: args.displace.clone(),
                 },
+                !args.no_shading_normals,
             )?;
             Ok((table, bvh, [t0, t1, t2, std::time::Instant::now()]))
         };
@@ -137,6 +142,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
             "triangles": tris,
             "threads": threads,
             "warm": args.warm,
+            "shading_normals": bvh.shading_normals,
             "table_ms": ms(t0, t1),
             "dice_ms": ms(t1, t2),
             "grid_ms": ms(t2, t3),

@@ -54,6 +54,11 @@ pub struct BenchArgs {
     /// Embree's displacement callback evaluate the same noise at the limit point).
     #[arg(long, value_name = "SPEC")]
     pub displace: Option<String>,
+    /// Build limitray's grid core for tracing alone, without the shading normals its hits
+    /// interpolate (their shading normal is then the geometric one), as Embree's engines
+    /// here give geometric normals only.
+    #[arg(long)]
+    pub no_shading_normals: bool,
 }
 
 /// Runs `limitray crosscheck`: prints the agreement figures (text, or JSON with `--json`).
@@ -134,6 +139,7 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         reps: args.reps,
         leak_rays: args.leak_rays,
         seed: args.seed,
+        shading_normals: !args.no_shading_normals,
         displace: match &args.displace {
             None => None,
             Some(spec) => match crate::dice::Displacement::parse(spec) {

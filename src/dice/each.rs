@@ -64,7 +64,8 @@ pub struct DomainView<'a> {
     pub frame: &'a [u32],
     /// Index of its first own point.
     base: u32,
-    /// Its own points (seam copies, then the interior) and their normals' octahedral codes.
+    /// Its own points (seam copies, then the interior) and their normals' octahedral codes
+    /// (zero when dicing finds no normals).
     positions: &'a [[f32; 3]],
     codes: &'a [u32],
     /// The shared points and their codes.
@@ -78,8 +79,9 @@ pub struct DomainView<'a> {
 }
 
 impl DomainView<'_> {
-    /// Position and normal code (of [`super::dice`]'s normal, [`crate::oct::oct_encode`]) of
-    /// vertex `v`: a shared point, or one of the domain's own.
+    /// Position and normal code (of [`super::dice`]'s normal, [`crate::oct::oct_encode`]; zero
+    /// when [`dice_each`] finds no normals) of vertex `v`: a shared point, or one of the
+    /// domain's own.
     #[inline(always)]
     pub fn point(&self, v: u32) -> ([f32; 3], u32) {
         match v.checked_sub(self.base) {
@@ -139,20 +141,25 @@ fn room<T: Clone + Default>(v: &mut Vec<T>, n: usize) -> &mut [T] {
 /// region, the parallel jobs) and returns one storage per job; then, in parallel, each job's
 /// domains are diced one after the other and given to `visit` with that job's storage. Of
 /// grid triangles the views hold no corners or records (the region implies them), only
-/// their levels where the domain is not one patch.
+/// their levels where the domain is not one patch. Without `normals`, the points' shading
+/// normals are neither found (where the positions do not need them: an undisplaced exact
+/// surface) nor encoded, and every normal code is zero; the positions are the same bits.
 pub fn dice_each<C: Send>(
     table: &PatchTable,
     mesh: &ControlMesh,
     opts: &DiceOptions,
+    normals: bool,
     plan: impl FnOnce(&DiceLayout) -> Result<Vec<C>>,
     visit: impl Fn(&mut C, &DomainView) -> Result<()> + Sync,
 ) -> Result<()> {
-    prepare(table, mesh, opts, true, |p| {
+    prepare(table, mesh, opts, true, normals, |p| {
         let (_, triangles) = p.totals()?;
         let n = p.num_shared();
         let mut shared_positions = vec![[0.0; 3]; n];
+        // Zero without normals (never written: the zeroed pages read cost no clearing).
         let mut shared_codes = vec![0u32; n];
-        p.eval_shared(&mut shared_positions, &mut [], &mut [], &mut shared_codes)?;
+        let codes_out: &mut [u32] = if normals { &mut shared_codes } else { &mut [] };
+        p.eval_shared(&mut shared_positions, &mut [], &mut [], codes_out)?;
         crate::stages::mark("dice: shared points");
         let firsts = p.firsts();
         // The regions (each looks its domain's level up in the table) in parallel; a region's
@@ -210,8 +217,11 @@ pub fn dice_each<C: Send>(
                             frame: room(&mut b.frame, z.frame),
                         };
                         ctx.domain(d.face as usize, d.k as usize, scratch, slices)?;
+                        // Without normals the buffer's codes stay zero (never encoded).
                         let codes = room(&mut b.codes, z.points);
-                        oct_encode_all(&b.normals[..z.points], codes);
+                        if normals {
+                            oct_encode_all(&b.normals[..z.points], codes);
+                        }
                         let view = DomainView {
                             plan: d,
                             frame: &b.frame[..z.frame],

@@ -424,7 +424,7 @@ pub fn estimate_size(
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
 /// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
-    prepare(table, mesh, opts, false, |p| p.mesh())
+    prepare(table, mesh, opts, false, true, |p| p.mesh())
 }
 
 /// Everything dicing knows before it evaluates a point: the domains, their sizes, and what
@@ -444,12 +444,15 @@ const CHUNK: usize = 64;
 
 /// Prepares the dicing of `mesh` (rates, the shared points' layout, the domains' sizes) and
 /// hands it to `then`; with `lean`, domains write no per-point parameters, and of their grid
-/// triangles neither corners nor records, only the levels, apart (see [`dice_each`]).
+/// triangles neither corners nor records, only the levels, apart (see [`dice_each`]); without
+/// `normals` (lean only), the points' shading normals are not found where they need not be
+/// (every point of an undisplaced exact surface: [`LatticeScratch::finish`]), nor encoded.
 fn prepare<R>(
     table: &PatchTable,
     mesh: &ControlMesh,
     opts: &DiceOptions,
     lean: bool,
+    normals: bool,
     then: impl FnOnce(&Prepared) -> Result<R>,
 ) -> Result<R> {
     // The table's level 0 where it kept it (building it again took 34 ms of the 316² grid's
@@ -510,6 +513,7 @@ fn prepare<R>(
         sharp_vertex: &sharp_vertex,
         displace: displacer.as_ref(),
         lean,
+        normals: normals || !lean,
     };
     // Sizes first (patterns only, nothing evaluated), so that every domain then writes its
     // points and triangles in place, in parallel, with no per-domain buffers to copy.
@@ -539,7 +543,7 @@ impl Prepared<'_> {
     /// Evaluates the shared points in parallel into their slots (no buffer of points to copy
     /// from), in groups of runs whose normals are found at once: their positions, and their
     /// normals and parameters (non-lean: `codes` empty) or their normals' octahedral codes
-    /// (lean: `normals` and `params` empty).
+    /// (lean: `normals` and `params` empty; `codes` too when dicing finds no normals).
     fn eval_shared(
         &self,
         positions: &mut [[f32; 3]],
@@ -548,13 +552,17 @@ impl Prepared<'_> {
         mut codes: &mut [u32],
     ) -> Result<()> {
         const GROUP: usize = 256;
-        let (table, lean) = (self.ctx.table, self.ctx.lean);
+        let (table, lean, with_normals) = (self.ctx.table, self.ctx.lean, self.ctx.normals);
         let displacer = self.ctx.displace;
         let groups = self.ctx.shared.groups(GROUP);
         let mut jobs = Vec::with_capacity(groups.len());
         let mut rest = positions;
         for (runs, len) in groups {
-            let (nl, cl) = if lean { (0, len) } else { (len, 0) };
+            let (nl, cl) = match (lean, with_normals) {
+                (false, _) => (len, 0),
+                (true, true) => (0, len),
+                (true, false) => (0, 0),
+            };
             jobs.push((
                 runs,
                 split_off(&mut rest, len),
@@ -606,11 +614,15 @@ impl Prepared<'_> {
                             domain = Some((at.face, at.k));
                             scratch.kept.clear();
                         }
-                        table.eval_d1_points(mine, &mut scratch.kept, &mut scratch.points)?;
+                        // Without normals, positions alone where the run's domain is one
+                        // B-spline patch (the same bits).
+                        if with_normals || !table.eval_points_p(mine, &mut scratch.points)? {
+                            table.eval_d1_points(mine, &mut scratch.kept, &mut scratch.points)?;
+                        }
                     }
-                    scratch.finish(table, at, put)?;
+                    scratch.finish(table, at, put, with_normals)?;
                 }
-                if lean {
+                if lean && with_normals {
                     oct_encode_all(group_normals, cds);
                 }
                 Ok::<(), Error>(())
@@ -806,14 +818,21 @@ struct LatticeScratch {
 
 impl LatticeScratch {
     /// The diced points of [`Self::points`], the `i`-th at `at(i)`: their unit normals found at
-    /// once ([`normals::unit_normals`]), then `put(i, point)`, rounded ([`rounded`]).
+    /// once ([`normals::unit_normals`]; zero without `with_normals`), then `put(i, point)`,
+    /// rounded ([`rounded`]).
     fn finish(
         &mut self,
         table: &PatchTable,
         at: impl Fn(usize) -> FaceCoord,
         mut put: impl FnMut(usize, Point),
+        with_normals: bool,
     ) -> Result<()> {
-        normals::unit_normals(table, &self.points, &at, &mut self.normals)?;
+        if with_normals {
+            normals::unit_normals(table, &self.points, &at, &mut self.normals)?;
+        } else {
+            self.normals.clear();
+            self.normals.resize(self.points.len(), [0.0; 3]);
+        }
         for (i, (pt, &n)) in self.points.iter().zip(&self.normals).enumerate() {
             let at = at(i);
             in_range(at, pt.p)?;
@@ -839,6 +858,9 @@ struct DomainCtx<'a> {
     /// triangles neither corners nor records (only their levels, apart, where the domain has
     /// several).
     lean: bool,
+    /// Whether the points' shading normals are found (always, unless lean dicing is asked to
+    /// skip them: [`dice_each`]).
+    normals: bool,
 }
 
 /// A point on a domain's side: its shared index, and whether it lies on a seam.
@@ -936,9 +958,15 @@ impl DomainCtx<'_> {
         debug_assert_eq!(pat.interior.len(), ((nu - 1) * (nv - 1)) as usize);
         let pts = &mut scratch.points;
         pts.clear();
-        if !self
-            .table
-            .eval_domain_lattice(f, k, nu, nv, |pt| pts.push(pt))
+        // Without normals, positions alone where the domain is one B-spline patch.
+        let alone = !self.normals
+            && self
+                .table
+                .eval_domain_lattice_p(f, k, nu, nv, |pt| pts.push(pt));
+        if !alone
+            && !self
+                .table
+                .eval_domain_lattice(f, k, nu, nv, |pt| pts.push(pt))
         {
             return Ok(false);
         }
@@ -946,7 +974,7 @@ impl DomainCtx<'_> {
             let [u, v] = pat.interior[i];
             FaceCoord::new(f as u32, k as u32, u, v)
         };
-        scratch.finish(self.table, at, put)?;
+        scratch.finish(self.table, at, put, self.normals)?;
         Ok(true)
     }
 
@@ -1296,7 +1324,7 @@ mod tests {
                     rate,
                     ..DiceOptions::default()
                 };
-                prepare(&table, mesh, &opts, false, |p| {
+                prepare(&table, mesh, &opts, false, true, |p| {
                     let mut sides = Sides::default();
                     for &(f, k) in &p.domains {
                         let (f, k) = (f as usize, k as usize);

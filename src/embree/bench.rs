@@ -48,6 +48,10 @@ pub struct BenchOptions {
     /// displaced triangles, and the reference intersector (undisplaced surfaces only) is left
     /// out.
     pub displace: Option<(f64, f64)>,
+    /// Whether limitray's grid core stores shading normals ([`GridMesh::dice`]) or is built
+    /// for tracing alone ([`GridMesh::dice_geometry`], as Embree's engines here: their hits
+    /// carry the geometric normal only).
+    pub shading_normals: bool,
 }
 
 impl Default for BenchOptions {
@@ -60,6 +64,7 @@ impl Default for BenchOptions {
             leak_rays: 100_000,
             seed: 1,
             displace: None,
+            shading_normals: true,
         }
     }
 }
@@ -151,6 +156,7 @@ impl BenchReport {
                     "threads": self.options.threads,
                     "reps": self.options.reps,
                     "displace": self.options.displace.map(|(a, f)| [a, f]),
+                    "shading_normals": self.options.shading_normals,
                     "camera": [self.camera.0, self.camera.1],
                     "far_offset": FAR_OFFSET,
                     "embree_version": self.embree_version,
@@ -495,6 +501,7 @@ fn build_limitray(
     rate: u32,
     reps: usize,
     displace: Option<(f64, f64)>,
+    shading_normals: bool,
 ) -> Result<Limitray> {
     let mut parts: [Vec<f64>; 5] = Default::default();
     let mut last: Option<(GridMesh, MeshBvh)> = None;
@@ -512,7 +519,7 @@ fn build_limitray(
         let t0 = Instant::now();
         let table = embree_table(mesh)?;
         let t1 = Instant::now();
-        let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options)?;
+        let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options, shading_normals)?;
         let t3 = Instant::now();
         // The triangle BVH needs the full diced mesh (every triangle's record).
         let diced = dice(&table, mesh, &options)?;
@@ -648,7 +655,13 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
 
     // limitray first, before Embree has started any worker threads, so that nothing of
     // Embree's runs during limitray's measurements.
-    let lr = build_limitray(mesh, opts.rate, opts.reps, opts.displace)?;
+    let lr = build_limitray(
+        mesh,
+        opts.rate,
+        opts.reps,
+        opts.displace,
+        opts.shading_normals,
+    )?;
     let targets = leak_targets(mesh, &lr.tris, opts.seed);
     let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
     let p = &lr.parts;
@@ -726,7 +739,7 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
             p[k] += FAR_OFFSET[k];
         }
     }
-    let far_lr = build_limitray(&far, opts.rate, 1, opts.displace)?;
+    let far_lr = build_limitray(&far, opts.rate, 1, opts.displace, opts.shading_normals)?;
     let far_targets = leak_targets(&far, &far_lr.tris, opts.seed);
     let far_rays = rays::towards_points(&far_targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
     results[0].leaks_far = leaks(&far_lr.grid, &far_rays);

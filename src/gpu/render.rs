@@ -262,6 +262,13 @@ pub fn pack_world(world: &World) -> Result<(PackedScene, u32)> {
         w.extend_from_slice(&[f(n[0]), f(n[1]), f(n[2])]);
     };
     for m in &world.scene.meshes {
+        if !m.shading_normals {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "the GPU renderer shades with the grid meshes' normals: a mesh was built \
+                 without them (GridMesh::dice_geometry)",
+            ));
+        }
         let at = here(w)?;
         for &code in &m.normals {
             decoded(w, code);

@@ -100,6 +100,15 @@ impl Extent {
         }
     }
 
+    /// Its normal codes: one per vertex, with shading normals.
+    fn normals(self, with_normals: bool) -> usize {
+        if with_normals {
+            self.coords / 3
+        } else {
+            0
+        }
+    }
+
     fn add(self, b: Extent) -> Extent {
         Extent {
             coords: self.coords + b.coords,
@@ -140,9 +149,11 @@ fn too_many(count: usize, what: &str, most: &str) -> Error {
 #[derive(Default)]
 struct Spare<'a> {
     coords: &'a mut [MaybeUninit<f32>],
+    /// Empty unless the mesh stores shading normals (`with_normals`).
     normals: &'a mut [MaybeUninit<u32>],
     boxes: &'a mut [MaybeUninit<Box4>],
     levels: &'a mut [MaybeUninit<u8>],
+    with_normals: bool,
 }
 
 /// Zeroes `items` (now initialised).
@@ -156,9 +167,10 @@ impl<'a> Spare<'a> {
     fn split_off(&mut self, e: Extent) -> Spare<'a> {
         Spare {
             coords: split_off(&mut self.coords, e.coords),
-            normals: split_off(&mut self.normals, e.coords / 3),
+            normals: split_off(&mut self.normals, e.normals(self.with_normals)),
             boxes: split_off(&mut self.boxes, e.boxes),
             levels: split_off(&mut self.levels, e.levels),
+            with_normals: self.with_normals,
         }
     }
 
@@ -202,31 +214,43 @@ where
         2 * rows * cols
     };
     // What `Extent::of(h)` gives, as the loops below cover it.
+    let codes = if out.with_normals { w * (rows + 1) } else { 0 };
     assert!(
         out.coords.len() == 3 * w * (rows + 1)
-            && out.normals.len() == w * (rows + 1)
+            && out.normals.len() == codes
             && out.boxes.len() == if h.two_level() { 4 } else { 0 }
             && out.levels.len() == levels,
         "a block's storage is its extent"
     );
     let mut row = [0u32; BLOCK + 1];
     let row = &mut row[..w];
-    let planes = out.coords.chunks_exact_mut(3 * w);
-    for ((y, plane), codes) in planes.enumerate().zip(out.normals.chunks_exact_mut(w)) {
+    for (y, plane) in out.coords.chunks_exact_mut(3 * w).enumerate() {
         s.g.row_vertices(s.frames, x0 as u32, (y0 + y) as u32, row);
         let (xs, yz) = plane.split_at_mut(w);
         let (ys, zs) = yz.split_at_mut(w);
-        for ((((&v, px), py), pz), c) in row.iter().zip(xs).zip(ys).zip(zs).zip(codes) {
-            let (q, code) = (s.point)(v);
-            px.write(q[0]);
-            py.write(q[1]);
-            pz.write(q[2]);
-            c.write(code);
+        let planes = row.iter().zip(xs).zip(ys).zip(zs);
+        if codes > 0 {
+            let codes = &mut out.normals[y * w..(y + 1) * w];
+            for ((((&v, px), py), pz), c) in planes.zip(codes) {
+                let (q, code) = (s.point)(v);
+                px.write(q[0]);
+                py.write(q[1]);
+                pz.write(q[2]);
+                c.write(code);
+            }
+        } else {
+            for (((&v, px), py), pz) in planes {
+                let q = (s.point)(v).0;
+                px.write(q[0]);
+                py.write(q[1]);
+                pz.write(q[2]);
+            }
         }
     }
     // SAFETY: the planes (`rows + 1` of `3 w` coordinates: the whole slice, as asserted) were
     // written item by item just above, each plane's three rows of `w` from the `w` vertices
-    // of `row`; `MaybeUninit<f32>` has `f32`'s layout.
+    // of `row` (and each row's `w` codes, the whole of `out.normals`, where it has them);
+    // `MaybeUninit<f32>` has `f32`'s layout.
     let coords = unsafe { &*(out.coords as *const [MaybeUninit<f32>] as *const [f32]) };
     let mut quadrants = [Box4::default(); 4];
     let root = plane_boxes(h, coords, &mut quadrants[..out.boxes.len()]);
@@ -304,6 +328,8 @@ struct Planning {
     total: Extent,
     /// Items of the block arrays initialised by the stores.
     initialised: AtomicUsize,
+    /// Whether the mesh stores shading normals ([`GridMesh::shading_normals`]).
+    normals: bool,
 }
 
 impl Planning {
@@ -356,14 +382,16 @@ impl Planning {
         for z in &mut m.coords.spare_capacity_mut()[total.coords..] {
             z.write(0.0);
         }
-        m.normals = Vec::with_capacity(total.coords / 3);
+        let normals = total.normals(self.normals);
+        m.normals = Vec::with_capacity(normals);
         m.boxes = Vec::with_capacity(total.boxes);
         m.levels = Vec::with_capacity(total.levels);
         let mut rest = Spare {
             coords: &mut m.coords.spare_capacity_mut()[..total.coords],
-            normals: &mut m.normals.spare_capacity_mut()[..total.coords / 3],
+            normals: &mut m.normals.spare_capacity_mut()[..normals],
             boxes: &mut m.boxes.spare_capacity_mut()[..total.boxes],
             levels: &mut m.levels.spare_capacity_mut()[..total.levels],
+            with_normals: self.normals,
         };
         let initialised = &self.initialised;
         let (mut p, mut h) = (&self.plans[..], &mut self.headers[..]);
@@ -395,11 +423,13 @@ impl Planning {
             mesh: mut m,
             total,
             initialised,
+            normals: with_normals,
             ..
         } = self;
+        let normals = total.normals(with_normals);
         // Every item of the block arrays was initialised: written by its block, or cleared by
         // its store when it was dropped.
-        let items = total.coords + total.coords / 3 + total.boxes + total.levels;
+        let items = total.coords + normals + total.boxes + total.levels;
         assert_eq!(
             initialised.into_inner(),
             items,
@@ -407,7 +437,7 @@ impl Planning {
         );
         assert!(
             m.coords.capacity() >= total.coords + 4
-                && m.normals.capacity() >= total.coords / 3
+                && m.normals.capacity() >= normals
                 && m.boxes.capacity() >= total.boxes
                 && m.levels.capacity() >= total.levels,
             "the block arrays are allocated before they are read"
@@ -416,7 +446,7 @@ impl Planning {
         // initialised, as just checked; the capacities were allocated for these lengths.
         unsafe {
             m.coords.set_len(total.coords + 4);
-            m.normals.set_len(total.coords / 3);
+            m.normals.set_len(normals);
             m.boxes.set_len(total.boxes);
             m.levels.set_len(total.levels);
         }
@@ -424,6 +454,7 @@ impl Planning {
             return Err(too_many(loose.len(), "loose triangles", "2^31"));
         }
         m.triangles = triangles;
+        m.shading_normals = with_normals;
         // Each block's bounds: the union of its root's children (absent ones are empty).
         let mut prim_boxes: Vec<top::Bounds> = headers
             .iter()
@@ -499,7 +530,10 @@ impl GridMesh {
             .par_chunks_mut(4096)
             .zip(d.normals.par_chunks(4096))
             .for_each(|(c, n)| oct_encode_all(n, c));
-        let mut planning = Planning::default();
+        let mut planning = Planning {
+            normals: true,
+            ..Planning::default()
+        };
         let stores = planning.plan(&d.grids, &runs)?;
         let codes = &codes;
         stores
@@ -548,17 +582,40 @@ impl GridMesh {
     /// bit, but each domain's blocks and loose triangles are stored by the worker that dices
     /// it, from its own buffers ([`dice_each`]), and the diced mesh is never made.
     pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<GridMesh> {
-        Self::dice_staged(table, mesh, opts).map(|(m, _)| m)
+        Self::dice_staged(table, mesh, opts, true).map(|(m, _)| m)
     }
 
-    /// [`Self::dice`], and when the blocks and loose triangles were all stored (the rest is
-    /// the strips and the top level), for the benchmarks' split of the build.
+    /// [`Self::dice`] without shading normals ([`GridMesh::shading_normals`] false): the
+    /// same blocks, vertices, boxes, levels, loose triangles and top level bit for bit, and
+    /// so the same hits, whose shading normal is then the geometric one ([`Hit::ns`] `=`
+    /// [`Hit::ng`]). For tracing alone (intersection tests, visibility): the points' normals
+    /// are neither found nor encoded, which on an undisplaced surface is a tenth of the
+    /// build, and the mesh holds 4 bytes less per vertex. The exact limit normal at a hit is
+    /// [`crate::Surface::limit_normal`] of its `(face, k, u, v)`.
+    ///
+    /// [`Hit::ns`]: crate::bvh::Hit::ns
+    /// [`Hit::ng`]: crate::bvh::Hit::ng
+    pub fn dice_geometry(
+        table: &PatchTable,
+        mesh: &ControlMesh,
+        opts: &DiceOptions,
+    ) -> Result<GridMesh> {
+        Self::dice_staged(table, mesh, opts, false).map(|(m, _)| m)
+    }
+
+    /// [`Self::dice`] (with `normals`, else [`Self::dice_geometry`]), and when the blocks
+    /// and loose triangles were all stored (the rest is the strips and the top level), for
+    /// the benchmarks' split of the build.
     pub(crate) fn dice_staged(
         table: &PatchTable,
         mesh: &ControlMesh,
         opts: &DiceOptions,
+        normals: bool,
     ) -> Result<(GridMesh, std::time::Instant)> {
-        let mut planning = Planning::default();
+        let mut planning = Planning {
+            normals,
+            ..Planning::default()
+        };
         let mut loose: Vec<Loose> = Vec::new();
         let mut triangles = 0;
         {
@@ -567,6 +624,7 @@ impl GridMesh {
                 table,
                 mesh,
                 opts,
+                normals,
                 move |layout| {
                     *triangles = layout.triangles;
                     // The regions in domain order, and each job's run of them.

@@ -44,7 +44,8 @@ use window::{lane_mask, Rows};
 pub struct Loose {
     /// Corners.
     pub p: [[f32; 3]; 3],
-    /// Octahedral normals of the corners.
+    /// Octahedral normals of the corners (zero in a mesh without
+    /// [`GridMesh::shading_normals`]).
     pub n: [u32; 3],
     /// `(u, v)` of the corners.
     pub uv: [[f32; 2]; 3],
@@ -66,7 +67,7 @@ pub struct GridMesh {
     /// Vertex coordinates of all blocks (per block, row by row: the row's `x`, then `y`, then
     /// `z` values), then four padding values (window rows are read four values at a time).
     pub coords: Vec<f32>,
-    /// Octahedral vertex normals of all blocks.
+    /// Octahedral vertex normals of all blocks (empty without [`Self::shading_normals`]).
     pub normals: Vec<u32>,
     /// Box nodes of all blocks.
     pub boxes: Vec<Box4>,
@@ -90,6 +91,10 @@ pub struct GridMesh {
     pub triangles: usize,
     /// Bounds of all vertices (`[min, max]`; inverted when empty).
     pub bounds: [[f32; 3]; 2],
+    /// Whether the mesh stores the limit surface's unit normals at its vertices, which hits
+    /// interpolate as their shading normal ([`Hit::ns`]); without them
+    /// ([`GridMesh::dice_geometry`]) a hit's shading normal is its geometric normal.
+    pub shading_normals: bool,
 }
 
 /// The most loose triangles in one strip (one top-level primitive).
@@ -165,28 +170,31 @@ impl GridMesh {
             }
             let (v, coords) = (v as usize, end.wrapping_sub(v) as usize);
             prefetch_bytes(self.coords.as_ptr().wrapping_add(v), 4 * coords);
-            if NORMALS {
+            if NORMALS && self.shading_normals {
                 prefetch_bytes(self.normals.as_ptr().wrapping_add(v / 3), 4 * coords / 3);
             }
         }
     }
 
     /// Prefetches what the hit record of quad `(x, y)` of block `b` reads beyond the block's
-    /// vertices: its corners' normals (two rows) and its triangles' levels.
+    /// vertices: its corners' normals (two rows, where the mesh has them) and its triangles'
+    /// levels.
     #[inline(always)]
     fn prefetch_record(&self, b: &Block, x: usize, y: usize) {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let w = b.cols as usize + 1;
-            let first = b.normal() as usize + y * w + x;
-            let p = self.normals.as_ptr().wrapping_add(first) as *const i8;
-            // The quad's diagonal corners `(x, y)` and `(x + 1, y + 1)`; the other two share
-            // their lines unless a line ends between them.
-            // SAFETY: prefetching never faults and has no effect on memory.
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(p);
-                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(4 * w + 4));
+            if self.shading_normals {
+                let w = b.cols as usize + 1;
+                let first = b.normal() as usize + y * w + x;
+                let p = self.normals.as_ptr().wrapping_add(first) as *const i8;
+                // The quad's diagonal corners `(x, y)` and `(x + 1, y + 1)`; the other two
+                // share their lines unless a line ends between them.
+                // SAFETY: prefetching never faults and has no effect on memory.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(p);
+                    _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(4 * w + 4));
+                }
             }
             if let Some(at) = b.level_index(x, y, 0) {
                 // SAFETY: as above.
@@ -451,24 +459,33 @@ impl GridMesh {
 
     /// The hit record of the triangle at `leaf` (a [`Hit::leaf`]: see [`LEAF_LOOSE`]) at `t`
     /// with barycentrics `b1, b2`: what [`Self::intersect`] returns for that triangle (the GPU
-    /// backend's hits are completed with it).
+    /// backend's hits are completed with it). Without [`Self::shading_normals`] its shading
+    /// normal is its geometric normal.
     pub fn hit_at(&self, leaf: u32, t: f32, b1: f32, b2: f32) -> Hit {
-        let (p, n, uv, id, face, k, level) = match Found::of(leaf) {
+        let (p, uv, id, face, k, level) = match Found::of(leaf) {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
                 let (x, y, h) = (x as usize, y as usize, h as usize);
                 let uv = b.uvs(grid_corners(x, y, h));
                 let level = b.triangle_level(&self.levels, x, y, h);
                 let id = b.triangle(x, y, h);
-                let n = self.corner_normals(leaf);
-                (self.corners(leaf), n, uv, id, b.face, b.k, level)
+                (self.corners(leaf), uv, id, b.face, b.k, level)
             }
             Found::Loose(li) => {
                 let l = &self.loose[li as usize];
-                (l.p, oct_decode3(l.n), l.uv, l.id, l.face, l.k, l.level)
+                (l.p, l.uv, l.id, l.face, l.k, l.level)
             }
         };
-        Corners { p, n, uv }.hit(t, b1, b2, id, face, k, level, leaf)
+        let n = if self.shading_normals {
+            self.corner_normals(leaf)
+        } else {
+            [[0.0; 3]; 3]
+        };
+        let mut hit = Corners { p, n, uv }.hit(t, b1, b2, id, face, k, level, leaf);
+        if !self.shading_normals {
+            hit.ns = hit.ng;
+        }
+        hit
     }
 
     /// The corners of the triangle at `leaf` (a [`Hit::leaf`]), in the order the hit's
@@ -517,7 +534,8 @@ impl GridMesh {
         }
     }
 
-    /// The unit shading normals at the corners of the triangle at `leaf` (decoded).
+    /// The unit shading normals at the corners of the triangle at `leaf` (decoded), in a mesh
+    /// with [`Self::shading_normals`].
     pub fn corner_normals(&self, leaf: u32) -> [[f32; 3]; 3] {
         match Found::of(leaf) {
             Found::Grid(bi, x, y, h) => {

@@ -258,6 +258,82 @@ pub fn eval_lattice(cp: &ControlGrid, nu: u32, nv: u32, mut out: impl FnMut(Poin
     }
 }
 
+/// [`contract_u`]'s value rows alone, the same bits.
+#[inline(always)]
+fn contract_u_p(cp: &ControlGrid, w: &[f64; 4]) -> Rows {
+    let mut r = [[0.0; 3]; 4];
+    for j in 0..4 {
+        for i in 0..4 {
+            axpy(&mut r[j], w[i], &cp[4 * j + i]);
+        }
+    }
+    r
+}
+
+/// [`finish_v`]'s position alone, the same bits.
+#[inline(always)]
+fn finish_v_p(r: &Rows, w: &[f64; 4]) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for j in 0..4 {
+        axpy(&mut p, w[j], &r[j]);
+    }
+    p
+}
+
+/// [`eval_lattice`]'s positions alone, the same bits and order, for 12 multiply-adds a point
+/// (beside each column's contraction, 48) and no derivative weights: for points whose
+/// normals are not wanted.
+pub fn eval_lattice_p(cp: &ControlGrid, nu: u32, nv: u32, mut out: impl FnMut([f64; 3])) {
+    if nu < 2 || nv < 2 {
+        return;
+    }
+    let mut cols = [[[0.0; 3]; 4]; 64];
+    let cols: &mut [Rows] = if nu as usize - 1 <= cols.len() {
+        &mut cols[..nu as usize - 1]
+    } else {
+        return eval_lattice(cp, nu, nv, |pt| out(pt.p));
+    };
+    for (i, c) in cols.iter_mut().enumerate() {
+        *c = contract_u_p(cp, &basis((i + 1) as f64 / nu as f64));
+    }
+    for j in 1..nv {
+        let w = basis(j as f64 / nv as f64);
+        for rows in cols.iter() {
+            out(finish_v_p(rows, &w));
+        }
+    }
+}
+
+/// [`eval_d1`]'s position alone, the same bits.
+#[inline]
+pub fn eval_p(cp: &ControlGrid, u: f64, v: f64) -> [f64; 3] {
+    finish_v_p(&contract_u_p(cp, &basis(u)), &basis(v))
+}
+
+/// The patch's points at `coords` (`(u, v)` each), positions alone: [`eval_d1`]'s bits, and
+/// where the points share one `u` (a side along `v`), their rows contracted once.
+pub fn eval_points_p(
+    cp: &ControlGrid,
+    coords: impl ExactSizeIterator<Item = [f64; 2]> + Clone,
+    mut out: impl FnMut([f64; 3]),
+) {
+    let mut first = coords.clone();
+    let u = first.next().map(|[u, _]| u);
+    match u {
+        Some(u) if coords.len() > 1 && first.all(|[x, _]| x.to_bits() == u.to_bits()) => {
+            let rows = contract_u_p(cp, &basis(u));
+            for [_, v] in coords {
+                out(finish_v_p(&rows, &basis(v)));
+            }
+        }
+        _ => {
+            for [u, v] in coords {
+                out(eval_p(cp, u, v));
+            }
+        }
+    }
+}
+
 /// The bicubic uniform B-spline patch of `cp` at `(u, v)`, with derivatives.
 #[inline]
 pub fn eval(cp: &ControlGrid, u: f64, v: f64) -> PatchPoint {
@@ -276,6 +352,44 @@ pub fn eval_d1(cp: &ControlGrid, u: f64, v: f64) -> PointD1 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The position-only evaluations give the positions of the full ones bit for bit:
+    /// random control points, lattices of every size up to past the column buffer, and
+    /// points along a side (one `u`) and scattered.
+    #[test]
+    fn positions_alone_are_the_full_positions() {
+        let mut rng = crate::harness::rng::SplitMix64(5);
+        let cp: ControlGrid =
+            std::array::from_fn(|_| std::array::from_fn(|_| rng.next_f64() * 20.0 - 10.0));
+        for (nu, nv) in [
+            (1, 5),
+            (2, 2),
+            (3, 7),
+            (8, 8),
+            (16, 3),
+            (64, 2),
+            (65, 4),
+            (70, 70),
+        ] {
+            let (mut full, mut alone) = (Vec::new(), Vec::new());
+            eval_lattice(&cp, nu, nv, |pt| full.push(pt.p.map(f64::to_bits)));
+            eval_lattice_p(&cp, nu, nv, |p| alone.push(p.map(f64::to_bits)));
+            assert_eq!(full, alone, "{nu} x {nv}");
+        }
+        let side: Vec<[f64; 2]> = (1..8).map(|j| [0.25, j as f64 / 8.0]).collect();
+        let scattered: Vec<[f64; 2]> = (0..50).map(|_| [rng.next_f64(), rng.next_f64()]).collect();
+        for coords in [&side[..], &scattered[..], &side[..1]] {
+            let mut alone = Vec::new();
+            eval_points_p(&cp, coords.iter().copied(), |p| {
+                alone.push(p.map(f64::to_bits))
+            });
+            let full: Vec<_> = coords
+                .iter()
+                .map(|&[u, v]| eval_d1(&cp, u, v).p.map(f64::to_bits))
+                .collect();
+            assert_eq!(full, alone);
+        }
+    }
 
     #[test]
     fn partition_of_unity_and_derivatives() {

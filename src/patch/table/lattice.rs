@@ -249,6 +249,57 @@ impl PatchTable {
         Ok(())
     }
 
+    /// [`Self::eval_domain_lattice`]'s positions alone (zero derivatives), the same bits, where
+    /// domain `(face, k)` is one B-spline patch ([`bspline::eval_lattice_p`]); `false`,
+    /// evaluating nothing, elsewhere.
+    pub(crate) fn eval_domain_lattice_p(
+        &self,
+        face: usize,
+        k: usize,
+        nu: u32,
+        nv: u32,
+        mut out: impl FnMut(PointD1),
+    ) -> bool {
+        let Some(patch) = self.bspline_root(face, k) else {
+            return false;
+        };
+        bspline::eval_lattice_p(&self.grid(patch), nu, nv, |p| {
+            out(PointD1 {
+                p,
+                ..PointD1::default()
+            })
+        });
+        true
+    }
+
+    /// [`Self::eval_d1_points`]'s positions alone (zero derivatives), the same bits, appended
+    /// to `out`, where the points all lie in one domain that is one B-spline patch;
+    /// `Ok(false)`, with nothing appended, elsewhere.
+    pub(crate) fn eval_points_p(
+        &self,
+        coords: &[FaceCoord],
+        out: &mut Vec<PointD1>,
+    ) -> crate::error::Result<bool> {
+        let one_domain = coords
+            .first()
+            .filter(|a| coords.iter().all(|c| (c.face, c.k) == (a.face, a.k)));
+        let Some(patch) = one_domain.and_then(|a| self.bspline_root(a.face as usize, a.k as usize))
+        else {
+            return Ok(false);
+        };
+        for &at in coords {
+            self.check(at)?;
+        }
+        let uv = coords.iter().map(|c| [c.u, c.v]);
+        bspline::eval_points_p(&self.grid(patch), uv, |p| {
+            out.push(PointD1 {
+                p,
+                ..PointD1::default()
+            })
+        });
+        Ok(true)
+    }
+
     /// Whether domain `(face, k)` exists and the table evaluates it exactly (a Catmull-Clark
     /// table without an approximation).
     fn exact_domain(&self, face: usize, k: usize) -> bool {
