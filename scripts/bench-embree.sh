@@ -11,7 +11,8 @@
 #
 # Usage: bash scripts/setup-embree.sh && bash scripts/bench-embree.sh > table.md 2> raw.jsonl
 # Environment: RAYS (default 1000000), REPS (3), THREADS ("1 2"),
-#              CONFIGS ("car:16 blob:16 car:64 316:4": mesh (car, blob or grid size) and rate).
+#              CONFIGS ("car:16 blob:16 car:64 316:4": mesh (car, blob or grid size) and rate),
+#              FLAGS (extra `limitray bench` flags, e.g. --no-shading-normals).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -19,6 +20,7 @@ RAYS="${RAYS:-1000000}"
 REPS="${REPS:-3}"
 CONFIGS="${CONFIGS:-car:16 blob:16 car:64 316:4}"
 THREADS="${THREADS:-1 2}"
+read -r -a FLAGS <<< "${FLAGS:-}"
 CAR="$ROOT/../shared/models/opensubdiv/catmark_car.obj"
 bash scripts/setup-embree.sh
 cargo build --release --features embree --quiet
@@ -37,7 +39,7 @@ for config in $CONFIGS; do
         else
             args=(--grid "$mesh")
         fi
-        json="$("$BIN" bench "${args[@]}" --rate "$rate" --rays "$RAYS" --threads "$t" --reps "$REPS" --json)"
+        json="$("$BIN" bench "${args[@]}" --rate "$rate" --rays "$RAYS" --threads "$t" --reps "$REPS" --json "${FLAGS[@]}")"
         echo "$json" >&2
         python3 - "$mesh" "$json" <<'PY'
 import json, sys

@@ -6,16 +6,16 @@
 //! CLI prints after `error: `): `OSError` for files, `ValueError` for everything else.
 
 use limitray::bvh::Ray64;
-use limitray::grid::GridMesh;
 use limitray::dice::{dice, DiceOptions, DiceRate, Displacement};
 use limitray::error::{Error, ErrorKind};
+use limitray::exact::{ExactTrace, ExactTracer};
+use limitray::grid::GridMesh;
 use limitray::mesh::obj::read_obj;
 use limitray::mesh::{BoundaryInterpolation, ControlMesh, CreaseMethod, FVarMode, Options, Scheme};
 use limitray::patch::approx::Approximation;
 use limitray::patch::uv::UvSurface;
 use limitray::patch::{LoopSurface, PatchOptions, PatchTable};
 use limitray::refine::Refiner;
-use limitray::exact::{ExactTrace, ExactTracer};
 use limitray::FaceCoord;
 use numpy::ndarray::Array2;
 use numpy::{
@@ -48,7 +48,12 @@ fn face_coords(
     u: &PyReadonlyArray1<'_, f64>,
     v: &PyReadonlyArray1<'_, f64>,
 ) -> PyResult<Vec<FaceCoord>> {
-    let (face, k, u, v) = (face.as_slice()?, k.as_slice()?, u.as_slice()?, v.as_slice()?);
+    let (face, k, u, v) = (
+        face.as_slice()?,
+        k.as_slice()?,
+        u.as_slice()?,
+        v.as_slice()?,
+    );
     let n = face.len();
     if k.len() != n || u.len() != n || v.len() != n {
         return Err(usage(format!(
@@ -151,8 +156,13 @@ impl Surface {
         if let Some(b) = cache.get(&rate) {
             return Ok(b.clone());
         }
-        let d = dice(&self.table, &self.mesh, &self.dice_options(rate))?;
-        let b = Arc::new(GridMesh::build(&d)?);
+        // Diced straight into the grid core: `GridMesh::build` of `dice`'s mesh, bit for bit
+        // (tests/grid.rs), without the diced mesh in between.
+        let b = Arc::new(GridMesh::dice(
+            &self.table,
+            &self.mesh,
+            &self.dice_options(rate),
+        )?);
         cache.insert(rate, b.clone());
         Ok(b)
     }
@@ -193,7 +203,10 @@ impl Surface {
         displace: Option<&str>,
         fvar: Option<&str>,
     ) -> PyResult<Surface> {
-        let displace = displace.map(Displacement::parse).transpose().map_err(py_err)?;
+        let displace = displace
+            .map(Displacement::parse)
+            .transpose()
+            .map_err(py_err)?;
         let fvar = fvar
             .map(|f| {
                 FVarMode::from_name(f).ok_or_else(|| {
@@ -333,9 +346,7 @@ impl Surface {
             self.table
                 .eval(at)
                 .map_err(|e| usage(format!("sample {i}: {e}")))?;
-            let s = uv
-                .eval(at)
-                .map_err(|e| usage(format!("sample {i}: {e}")))?;
+            let s = uv.eval(at).map_err(|e| usage(format!("sample {i}: {e}")))?;
             out.extend_from_slice(&s.st);
             out.extend_from_slice(&s.du);
             out.extend_from_slice(&s.dv);
@@ -379,13 +390,23 @@ impl Surface {
             let mut rays = Vec::with_capacity(n);
             for i in 0..n {
                 let (oi, di) = (&o[3 * i..3 * i + 3], &d[3 * i..3 * i + 3]);
-                let finite = |x: f64| if exact { x.is_finite() } else { (x as f32).is_finite() };
+                let finite = |x: f64| {
+                    if exact {
+                        x.is_finite()
+                    } else {
+                        (x as f32).is_finite()
+                    }
+                };
                 if let Some(x) = oi.iter().chain(di).find(|&&x| !finite(x)) {
                     return Err(usage(format!("ray {i}: invalid number '{x}'")));
                 }
                 let ray = Ray64::new([oi[0], oi[1], oi[2]], [di[0], di[1], di[2]]);
                 let rounded = ray.to_f32();
-                let zero = if exact { ray.dir == [0.0; 3] } else { rounded.dir == [0.0; 3] };
+                let zero = if exact {
+                    ray.dir == [0.0; 3]
+                } else {
+                    rounded.dir == [0.0; 3]
+                };
                 if zero {
                     return Err(usage(format!("ray {i}: ray direction is zero")));
                 }
