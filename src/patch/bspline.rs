@@ -260,7 +260,7 @@ pub fn eval_lattice(cp: &ControlGrid, nu: u32, nv: u32, mut out: impl FnMut(Poin
 
 /// [`contract_u`]'s value rows alone, the same bits.
 #[inline(always)]
-fn contract_u_p(cp: &ControlGrid, w: &[f64; 4]) -> Rows {
+pub(crate) fn contract_u_p(cp: &ControlGrid, w: &[f64; 4]) -> Rows {
     let mut r = [[0.0; 3]; 4];
     for j in 0..4 {
         for i in 0..4 {
@@ -272,7 +272,7 @@ fn contract_u_p(cp: &ControlGrid, w: &[f64; 4]) -> Rows {
 
 /// [`finish_v`]'s position alone, the same bits.
 #[inline(always)]
-fn finish_v_p(r: &Rows, w: &[f64; 4]) -> [f64; 3] {
+pub(crate) fn finish_v_p(r: &Rows, w: &[f64; 4]) -> [f64; 3] {
     let mut p = [0.0; 3];
     for j in 0..4 {
         axpy(&mut p, w[j], &r[j]);

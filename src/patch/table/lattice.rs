@@ -26,12 +26,43 @@ impl PatchTable {
         k: usize,
         nu: u32,
         nv: u32,
+        out: impl FnMut(PointD1),
+    ) -> bool {
+        self.domain_lattice::<true>(face, k, nu, nv, out)
+    }
+
+    /// [`Self::eval_domain_lattice`]'s positions alone (zero derivatives), the same bits: a
+    /// B-spline leaf's, a single-crease leaf's and a Stam leaf's regular sub-patch's points
+    /// are summed without their derivatives ([`bspline::eval_lattice_p`] where the domain is
+    /// one B-spline patch); other points are evaluated whole.
+    pub(crate) fn eval_domain_lattice_p(
+        &self,
+        face: usize,
+        k: usize,
+        nu: u32,
+        nv: u32,
+        out: impl FnMut(PointD1),
+    ) -> bool {
+        self.domain_lattice::<false>(face, k, nu, nv, out)
+    }
+
+    /// [`Self::eval_domain_lattice`], with the derivatives (`D1`) or without.
+    fn domain_lattice<const D1: bool>(
+        &self,
+        face: usize,
+        k: usize,
+        nu: u32,
+        nv: u32,
         mut out: impl FnMut(PointD1),
     ) -> bool {
         if !self.exact_domain(face, k) {
             return false;
         }
         if let Some(patch) = self.bspline_root(face, k) {
+            if !D1 {
+                bspline::eval_lattice_p(&self.grid(patch), nu, nv, |p| out(alone(p)));
+                return true;
+            }
             bspline::eval_lattice(&self.grid(patch), nu, nv, |pt| {
                 // The root's frame, as `eval` applies it (the identity up to the sign of zeros).
                 out(Frame::UNIT.face_point_d1(pt))
@@ -70,13 +101,15 @@ impl PatchTable {
                         (p, 0),
                         s,
                         || {
-                            bspline::contract_u(
-                                &self.grid(patch),
-                                &bspline::basis(s),
-                                &bspline::basis_d1(s),
-                            )
+                            contract::<D1>(&self.grid(patch), &bspline::basis(s), || {
+                                bspline::basis_d1(s)
+                            })
                         },
                     );
+                    if !D1 {
+                        out(alone(bspline::finish_v_p(&rows.0, &bspline::basis(t))));
+                        continue;
+                    }
                     bspline::finish_v(rows, &bspline::basis(t), &bspline::basis_d1(t))
                 }
                 PatchKind::SingleCrease { edge, sharpness } => {
@@ -87,10 +120,14 @@ impl PatchTable {
                         s,
                         || {
                             let bu = single_crease::basis_u(edge, curve, s, t);
-                            bspline::contract_u(&self.grid(patch), &bu.w, &bu.d1)
+                            contract::<D1>(&self.grid(patch), &bu.w, || bu.d1)
                         },
                     );
                     let bv = single_crease::basis_v(edge, curve, s, t);
+                    if !D1 {
+                        out(alone(bspline::finish_v_p(&rows.0, &bv.w)));
+                        continue;
+                    }
                     bspline::finish_v(rows, &bv.w, &bv.d1)
                 }
                 // A Stam patch's point in a regular sub-patch (not at the extraordinary
@@ -113,8 +150,12 @@ impl PatchTable {
                     let rows =
                         Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(key, s2, || {
                             let grid = kept.stam_grid(p, basis, (m, q), cps);
-                            bspline::contract_u(&grid, &bspline::basis(s2), &bspline::basis_d1(s2))
+                            contract::<D1>(&grid, &bspline::basis(s2), || bspline::basis_d1(s2))
                         });
+                    if !D1 {
+                        out(alone(bspline::finish_v_p(&rows.0, &bspline::basis(t2))));
+                        continue;
+                    }
                     let pt = bspline::finish_v(rows, &bspline::basis(t2), &bspline::basis_d1(t2));
                     out(frame.face_point_d1(pt));
                     continue;
@@ -127,6 +168,30 @@ impl PatchTable {
             out(frame.face_point_d1(pt));
         }
         true
+    }
+}
+
+/// A position alone, as a point with zero derivatives.
+#[inline(always)]
+fn alone(p: [f64; 3]) -> PointD1 {
+    PointD1 {
+        p,
+        ..PointD1::default()
+    }
+}
+
+/// [`bspline::contract_u`] with weights `w` and, with `D1`, derivative weights `d1()`; without,
+/// the value rows alone (the same bits) and zero derivative rows.
+#[inline(always)]
+fn contract<const D1: bool>(
+    cp: &ControlGrid,
+    w: &[f64; 4],
+    d1: impl FnOnce() -> [f64; 4],
+) -> (bspline::Rows, bspline::Rows) {
+    if D1 {
+        bspline::contract_u(cp, w, &d1())
+    } else {
+        (bspline::contract_u_p(cp, w), [[0.0; 3]; 4])
     }
 }
 
@@ -249,29 +314,6 @@ impl PatchTable {
         Ok(())
     }
 
-    /// [`Self::eval_domain_lattice`]'s positions alone (zero derivatives), the same bits, where
-    /// domain `(face, k)` is one B-spline patch ([`bspline::eval_lattice_p`]); `false`,
-    /// evaluating nothing, elsewhere.
-    pub(crate) fn eval_domain_lattice_p(
-        &self,
-        face: usize,
-        k: usize,
-        nu: u32,
-        nv: u32,
-        mut out: impl FnMut(PointD1),
-    ) -> bool {
-        let Some(patch) = self.bspline_root(face, k) else {
-            return false;
-        };
-        bspline::eval_lattice_p(&self.grid(patch), nu, nv, |p| {
-            out(PointD1 {
-                p,
-                ..PointD1::default()
-            })
-        });
-        true
-    }
-
     /// [`Self::eval_d1_points`]'s positions alone (zero derivatives), the same bits, appended
     /// to `out`, where the points all lie in one domain that is one B-spline patch;
     /// `Ok(false)`, with nothing appended, elsewhere.
@@ -291,12 +333,7 @@ impl PatchTable {
             self.check(at)?;
         }
         let uv = coords.iter().map(|c| [c.u, c.v]);
-        bspline::eval_points_p(&self.grid(patch), uv, |p| {
-            out.push(PointD1 {
-                p,
-                ..PointD1::default()
-            })
-        });
+        bspline::eval_points_p(&self.grid(patch), uv, |p| out.push(alone(p)));
         Ok(true)
     }
 
