@@ -49,6 +49,15 @@ fn children(
     assert!(out.len() <= WIDTH, "at most eight children");
 }
 
+/// Sets child `c` of `node` to `r`, with `b` the union of what lies below it, and widens
+/// `all` (the union below the node) by `b`.
+fn set_child(node: &mut Node8, c: usize, (r, b): (Ref, Bounds), all: &mut Bounds) {
+    node.child[c] = r;
+    node.boxes.include(c, b[0]);
+    node.boxes.include(c, b[1]);
+    *all = union(*all, b);
+}
+
 /// Sets `node`'s boxes from its children (`boxes` for primitives, `content` for nodes: the
 /// union of what lies below node `i` at `content[i]`) and returns their union.
 fn fill_boxes(node: &mut Node8, boxes: &[Bounds], content: &[Bounds]) -> Bounds {
@@ -62,9 +71,7 @@ fn fill_boxes(node: &mut Node8, boxes: &[Bounds], content: &[Bounds]) -> Bounds 
         } else {
             content[r as usize]
         };
-        node.boxes.include(c, b[0]);
-        node.boxes.include(c, b[1]);
-        all = union(all, b);
+        set_child(node, c, (r, b), &mut all);
     }
     all
 }
@@ -119,7 +126,7 @@ pub(super) fn nodes(bvh2: &Bvh2, collapse: &Collapse, boxes: &[Bounds]) -> (Vec<
     // The first levels, breadth first: each node's binary node and level, and its children
     // (a node's `Err(j)`: the `j`-th node of the next level).
     let mut first: Vec<(usize, usize)> = vec![(0, 1)];
-    let mut first_kids: Vec<[Result<Ref, usize>; WIDTH]> = Vec::new();
+    let mut first_kids: Vec<[Kid; WIDTH]> = Vec::new();
     let (mut buf, mut kids) = (Vec::with_capacity(WIDTH), Vec::with_capacity(WIDTH));
     let mut start = 0;
     // The level whose nodes root the subtrees (empty when the first levels are all).
@@ -194,16 +201,13 @@ pub(super) fn nodes(bvh2: &Bvh2, collapse: &Collapse, boxes: &[Bounds]) -> (Vec<
             let mut node = Node8::EMPTY;
             let mut all = NONE;
             for (c, k) in first_kids[i].into_iter().enumerate() {
-                let (r, b) = match k {
+                let child = match k {
                     Ok(EMPTY) => continue,
                     Ok(r) => (r, boxes[(r & !LEAF) as usize]),
                     Err(j) if i >= last => (offsets[j] as Ref, blocks[j].1),
                     Err(j) => ((level_end + j) as Ref, content[level_end + j]),
                 };
-                node.child[c] = r;
-                node.boxes.include(c, b[0]);
-                node.boxes.include(c, b[1]);
-                all = union(all, b);
+                set_child(&mut node, c, child, &mut all);
             }
             content[i] = all;
             head[i].write(node);
