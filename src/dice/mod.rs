@@ -962,7 +962,7 @@ impl DomainCtx<'_> {
         let alone = !self.normals
             && self
                 .table
-                .eval_domain_lattice_p(f, k, nu, nv, |pt| pts.push(pt));
+                .eval_domain_lattice_with::<false>(f, k, nu, nv, |pt| pts.push(pt));
         if !alone
             && !self
                 .table

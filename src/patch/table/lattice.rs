@@ -28,26 +28,15 @@ impl PatchTable {
         nv: u32,
         out: impl FnMut(PointD1),
     ) -> bool {
-        self.domain_lattice::<true>(face, k, nu, nv, out)
+        self.eval_domain_lattice_with::<true>(face, k, nu, nv, out)
     }
 
-    /// [`Self::eval_domain_lattice`]'s positions alone (zero derivatives), the same bits: a
-    /// B-spline leaf's, a single-crease leaf's and a Stam leaf's regular sub-patch's points
-    /// are summed without their derivatives ([`bspline::eval_lattice_p`] where the domain is
-    /// one B-spline patch); other points are evaluated whole.
-    pub(crate) fn eval_domain_lattice_p(
-        &self,
-        face: usize,
-        k: usize,
-        nu: u32,
-        nv: u32,
-        out: impl FnMut(PointD1),
-    ) -> bool {
-        self.domain_lattice::<false>(face, k, nu, nv, out)
-    }
-
-    /// [`Self::eval_domain_lattice`], with the derivatives (`D1`) or without.
-    fn domain_lattice<const D1: bool>(
+    /// [`Self::eval_domain_lattice`] with the derivatives (`D1`), or the positions alone
+    /// (zero derivatives), the same bits: a B-spline leaf's, a single-crease leaf's and a Stam
+    /// leaf's regular sub-patch's points are then summed without their derivatives
+    /// ([`bspline::eval_lattice_p`] where the domain is one B-spline patch); other points are
+    /// evaluated whole.
+    pub(crate) fn eval_domain_lattice_with<const D1: bool>(
         &self,
         face: usize,
         k: usize,
