@@ -230,7 +230,7 @@ impl MeshBvh {
         let idx = self.diced.triangles[tri as usize];
         Corners {
             p: self.tri_verts[li],
-            n: idx.map(|i| self.diced.normals[i as usize]),
+            n: Some(idx.map(|i| self.diced.normals[i as usize])),
             uv: info.uv,
         }
         .hit(t, b1, b2, tri, info.face, info.k, info.level, li as u32)
@@ -241,8 +241,9 @@ impl MeshBvh {
 pub(crate) struct Corners {
     /// Positions.
     pub p: [[f32; 3]; 3],
-    /// Unit shading normals.
-    pub n: [[f32; 3]; 3],
+    /// Unit shading normals (`None` where the structure stores none: the shading normal is
+    /// then the geometric one).
+    pub n: Option<[[f32; 3]; 3]>,
     /// `(u, v)` in the face's parameterisation.
     pub uv: [[f32; 2]; 3],
 }
@@ -250,7 +251,7 @@ pub(crate) struct Corners {
 impl Corners {
     /// The hit at `t` with barycentrics `b1, b2`: parameters and shading normal interpolated,
     /// geometric normal from the edges (the shading normal falls back to it where the
-    /// interpolated normals cancel).
+    /// interpolated normals cancel, and is it without corner normals).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn hit(
         &self,
@@ -263,21 +264,28 @@ impl Corners {
         level: u8,
         leaf: u32,
     ) -> Hit {
-        let (uv, n) = (&self.uv, &self.n);
+        let uv = &self.uv;
         let [a, b, c] = self.p;
         let b0 = 1.0 - b1 - b2;
         let u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
         let v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
         let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let (ng, ns) = normalize2(
-            [
-                e1[1] * e2[2] - e1[2] * e2[1],
-                e1[2] * e2[0] - e1[0] * e2[2],
-                e1[0] * e2[1] - e1[1] * e2[0],
-            ],
-            std::array::from_fn(|i| b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]),
-        );
+        let cross = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        let (ng, ns) = match &self.n {
+            Some(n) => normalize2(
+                cross,
+                std::array::from_fn(|i| b0 * n[0][i] + b1 * n[1][i] + b2 * n[2][i]),
+            ),
+            None => {
+                let ng = normalize(cross);
+                (ng, ng)
+            }
+        };
         Hit {
             t,
             triangle,

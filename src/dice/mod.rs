@@ -829,13 +829,15 @@ impl LatticeScratch {
     ) -> Result<()> {
         if with_normals {
             normals::unit_normals(table, &self.points, &at, &mut self.normals)?;
-        } else {
-            self.normals.clear();
-            self.normals.resize(self.points.len(), [0.0; 3]);
         }
-        for (i, (pt, &n)) in self.points.iter().zip(&self.normals).enumerate() {
+        for (i, pt) in self.points.iter().enumerate() {
             let at = at(i);
             in_range(at, pt.p)?;
+            let n = if with_normals {
+                self.normals[i]
+            } else {
+                [0.0; 3]
+            };
             put(i, point(at, pt.p, n));
         }
         Ok(())
@@ -958,16 +960,15 @@ impl DomainCtx<'_> {
         debug_assert_eq!(pat.interior.len(), ((nu - 1) * (nv - 1)) as usize);
         let pts = &mut scratch.points;
         pts.clear();
-        // Without normals, positions alone where the domain is one B-spline patch.
-        let alone = !self.normals
-            && self
+        // Without normals, the positions alone where the leaves allow (the same bits).
+        let push = |pt| pts.push(pt);
+        let evaluated = match self.normals {
+            true => self.table.eval_domain_lattice(f, k, nu, nv, push),
+            false => self
                 .table
-                .eval_domain_lattice_with::<false>(f, k, nu, nv, |pt| pts.push(pt));
-        if !alone
-            && !self
-                .table
-                .eval_domain_lattice(f, k, nu, nv, |pt| pts.push(pt))
-        {
+                .eval_domain_lattice_with::<false>(f, k, nu, nv, push),
+        };
+        if !evaluated {
             return Ok(false);
         }
         let at = |i: usize| {

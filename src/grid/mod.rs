@@ -476,16 +476,8 @@ impl GridMesh {
                 (l.p, l.uv, l.id, l.face, l.k, l.level)
             }
         };
-        let n = if self.shading_normals {
-            self.corner_normals(leaf)
-        } else {
-            [[0.0; 3]; 3]
-        };
-        let mut hit = Corners { p, n, uv }.hit(t, b1, b2, id, face, k, level, leaf);
-        if !self.shading_normals {
-            hit.ns = hit.ng;
-        }
-        hit
+        let n = self.shading_normals.then(|| self.corner_normals(leaf));
+        Corners { p, n, uv }.hit(t, b1, b2, id, face, k, level, leaf)
     }
 
     /// The corners of the triangle at `leaf` (a [`Hit::leaf`]), in the order the hit's

@@ -271,11 +271,7 @@ impl PatchTable {
         kept: &mut Kept,
         out: &mut Vec<PointD1>,
     ) -> crate::error::Result<()> {
-        let one_domain = coords
-            .first()
-            .filter(|a| coords.iter().all(|c| (c.face, c.k) == (a.face, a.k)));
-        let Some(patch) = one_domain.and_then(|a| self.bspline_root(a.face as usize, a.k as usize))
-        else {
+        let Some(patch) = self.one_bspline_domain(coords) else {
             for &at in coords {
                 out.push(self.eval_d1_with(at, kept)?);
             }
@@ -311,11 +307,7 @@ impl PatchTable {
         coords: &[FaceCoord],
         out: &mut Vec<PointD1>,
     ) -> crate::error::Result<bool> {
-        let one_domain = coords
-            .first()
-            .filter(|a| coords.iter().all(|c| (c.face, c.k) == (a.face, a.k)));
-        let Some(patch) = one_domain.and_then(|a| self.bspline_root(a.face as usize, a.k as usize))
-        else {
+        let Some(patch) = self.one_bspline_domain(coords) else {
             return Ok(false);
         };
         for &at in coords {
@@ -324,6 +316,16 @@ impl PatchTable {
         let uv = coords.iter().map(|c| [c.u, c.v]);
         bspline::eval_points_p(&self.grid(patch), uv, |p| out.push(alone(p)));
         Ok(true)
+    }
+
+    /// The B-spline patch that is the whole of the one domain all of `coords` lie in, if
+    /// they do and it is one.
+    fn one_bspline_domain(&self, coords: &[FaceCoord]) -> Option<&super::Patch> {
+        let a = coords.first()?;
+        coords
+            .iter()
+            .all(|c| (c.face, c.k) == (a.face, a.k))
+            .then(|| self.bspline_root(a.face as usize, a.k as usize))?
     }
 
     /// Whether domain `(face, k)` exists and the table evaluates it exactly (a Catmull-Clark
