@@ -28,7 +28,7 @@ use crate::mesh::{generate, CreaseMethod, Options};
 use crate::refine::limit::vertex_limit_masks;
 use crate::refine::{step, Level};
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, OnceLock};
 
 /// Largest valence evaluated by Stam's method; end caps at higher valences are subdivided on
 /// demand.
@@ -161,18 +161,73 @@ fn walk(
 /// has any sharpness; and the faces, written over the gathered vertices, are exactly those of
 /// the canonical configuration of valence `n` (so the neighbourhood is that configuration, not
 /// one with vertices shared in other ways).
+///
+/// The canonical configuration guides the gathering: each face walked writes its vertices
+/// into the slots its canonical face names, and a vertex found in a slot already filled must
+/// be the one there. That is [`gather_faces`]' answer followed by the comparison with the
+/// configuration's faces (a test checks that both agree), without searching the gathered
+/// vertices for each face's vertex and without collecting the faces.
 pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
-    let (c, out, faces) = gather_faces(level, f)?;
-    let n = (out.len() - 8) / 2;
-    (faces == basis(n).faces).then_some((c, out))
+    let (c, ev, n) = stam_corner(level, f)?;
+    let topo = &level.topo;
+    let fv = topo.face_vertices(f);
+    let canonical = &basis_ref(n).faces;
+    let mut out = vec![u32::MAX; 2 * n + 8];
+    out[0] = ev;
+    // Faces walked so far; whether every vertex went to a free slot or to its own; whether
+    // every edge of the faces walked is smooth.
+    let (mut walked, mut consistent, mut smooth_edges) = (0, true, true);
+    let mut visit = |g: usize, j: usize| {
+        let gv = topo.face_vertices(g);
+        smooth_edges &= topo
+            .face_edge_list(g)
+            .iter()
+            .all(|&e| level.edge_sharpness[e as usize] == 0.0);
+        match canonical.get(walked) {
+            Some(local) => {
+                for (i, &slot) in local.iter().enumerate() {
+                    let x = gv[(j + i) % 4];
+                    let at = &mut out[slot as usize];
+                    if *at == u32::MAX {
+                        *at = x;
+                    } else if *at != x {
+                        consistent = false;
+                    }
+                }
+            }
+            None => consistent = false,
+        }
+        walked += 1;
+    };
+    walk(level, ev, f, n, &mut visit)?;
+    for k in 1..4 {
+        walk(level, fv[(c + k) % 4], f, 4, &mut visit)?;
+    }
+    if !consistent || walked != canonical.len() || out.contains(&u32::MAX) {
+        return None;
+    }
+    // Distinct vertices (a vertex in two slots is another configuration).
+    let mut sorted = out.clone();
+    sorted.sort_unstable();
+    if sorted.windows(2).any(|w| w[0] == w[1]) {
+        return None;
+    }
+    // No sharpness on the walked faces' edges (checked as they were walked) or the gathered
+    // vertices.
+    let smooth_verts = out
+        .iter()
+        .all(|&v| level.vertex_sharpness[v as usize] == 0.0);
+    (smooth_edges && smooth_verts).then_some((c, out))
 }
 
 /// A face of the configuration as positions in the gathered vertices, from the corner walked.
 type LocalFace = [u8; 4];
 
-/// [`gather`] without the comparison with the canonical configuration; also returns the faces
-/// visited (in visiting order) over the gathered vertices.
-fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFace>)> {
+/// The first checks of Stam's configuration at face `f` (see [`gather`]): `f` is a quad, not
+/// a hole; exactly one corner `c` is not an interior vertex of valence 4, and that vertex
+/// `ev` is interior, manifold, of valence `n` in `3..=MAX_VALENCE`; no edge at `ev` and no
+/// corner of `f` is sharp. Returns `(c, ev, n)`.
+fn stam_corner(level: &Level, f: usize) -> Option<(usize, u32, usize)> {
     let topo = &level.topo;
     let fv = topo.face_vertices(f);
     if fv.len() != 4 || level.face_hole[f] {
@@ -183,10 +238,8 @@ fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFa
         !t.boundary && !t.nonmanifold
     };
     let valence = |v: u32| topo.vertex_edges(v as usize).len();
-    let irregular: Vec<usize> = (0..4)
-        .filter(|&k| !(interior(fv[k]) && valence(fv[k]) == 4))
-        .collect();
-    let &[c] = irregular.as_slice() else {
+    let mut irregular = (0..4).filter(|&k| !(interior(fv[k]) && valence(fv[k]) == 4));
+    let (Some(c), None) = (irregular.next(), irregular.next()) else {
         return None;
     };
     let ev = fv[c];
@@ -196,8 +249,8 @@ fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFa
         return None;
     }
     // A sharp edge at the extraordinary vertex or a sharp corner of the face: refused by the
-    // smoothness test below after the walk (which the faces beside a crease, isolated level
-    // after level, paid every time).
+    // smoothness test after the walk (which the faces beside a crease, isolated level after
+    // level, paid every time).
     let sharp_edge = |e: &u32| level.edge_sharpness[*e as usize] != 0.0;
     if topo.vertex_edges(ev as usize).iter().any(sharp_edge)
         || fv
@@ -206,6 +259,15 @@ fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFa
     {
         return None;
     }
+    Some((c, ev, n))
+}
+
+/// [`gather`] without the comparison with the canonical configuration; also returns the faces
+/// visited (in visiting order) over the gathered vertices.
+fn gather_faces(level: &Level, f: usize) -> Option<(usize, Vec<u32>, Vec<LocalFace>)> {
+    let topo = &level.topo;
+    let fv = topo.face_vertices(f);
+    let (c, ev, n) = stam_corner(level, f)?;
     let mut out = vec![ev];
     let mut faces = Vec::with_capacity(n + 12);
     walk(level, ev, f, n, |g, j| {
@@ -621,19 +683,19 @@ unsafe fn grid_avx(w: &[f64], cps: &[[f64; 3]]) -> ControlGrid {
 /// The tabulated matrices of valence `n` (3..=[`MAX_VALENCE`]), built on first use and
 /// shared by every table in the process.
 pub fn basis(n: usize) -> Arc<StamBasis> {
-    static CACHE: OnceLock<Mutex<HashMap<usize, Arc<StamBasis>>>> = OnceLock::new();
-    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
-    if let Some(b) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&n) {
-        return b.clone();
-    }
-    // Built outside the lock: two threads may both build it, the first one stored wins.
-    let b = Arc::new(StamBasis::new(n));
-    cache
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .entry(n)
-        .or_insert(b)
-        .clone()
+    basis_ref(n).clone()
+}
+
+/// [`basis`] borrowed: no lock and no reference count to touch (every Stam face's gathering
+/// reads its valence's configuration, from every worker at once).
+fn basis_ref(n: usize) -> &'static Arc<StamBasis> {
+    static CACHE: [OnceLock<Arc<StamBasis>>; MAX_VALENCE + 1] =
+        [const { OnceLock::new() }; MAX_VALENCE + 1];
+    assert!(
+        (3..=MAX_VALENCE).contains(&n),
+        "valence {n} outside 3..={MAX_VALENCE}"
+    );
+    CACHE[n].get_or_init(|| Arc::new(StamBasis::new(n)))
 }
 
 #[cfg(test)]
@@ -697,6 +759,119 @@ mod tests {
             }
             assert!((b.limit.iter().sum::<f64>() - 1.0).abs() < 1e-14);
         }
+    }
+
+    /// [`gather`] (guided by the canonical configuration) answers as the searching reference
+    /// does ([`gather_faces`], then the comparison of its faces with the configuration's):
+    /// the same corner and vertices, or `None` both, on every face of two levels of stars of
+    /// many valences (their faces rotated), of shapes with boundaries, creases, corners,
+    /// n-gons and triangles, and of small closed grids whose rings wrap onto themselves
+    /// (vertices shared in other ways), with random sharpness on some edges and vertices.
+    #[test]
+    fn guided_gathering_is_the_searching_one() {
+        use crate::refine::{step, Level};
+        let reference = |level: &Level, f: usize| {
+            let (c, out, faces) = gather_faces(level, f)?;
+            (faces == basis((out.len() - 8) / 2).faces).then_some((c, out))
+        };
+        let mut meshes: Vec<ControlMesh> = [3, 5, 6, 7, 12]
+            .iter()
+            .map(|&n| jittered_star(n, n as u64))
+            .collect();
+        meshes.extend([
+            generate::star(4, 2),
+            generate::grid(3),
+            shapes::rounded_box(2.5),
+            shapes::blob(),
+            shapes::gear(6),
+            shapes::spindle(5),
+            shapes::edited_box(),
+            shapes::cyclorama(2.0, 1.0, 1.0),
+            shapes::triangulated(&shapes::rounded_box(0.0)),
+        ]);
+        let merged = meshes.len();
+        // Stars with two vertices of one configuration merged (vertices not of one face, in
+        // the rings around the face's regular corners): rings that share vertices in other
+        // ways than the configuration's.
+        for n in [3, 5, 6] {
+            let star = jittered_star(n, 40 + n as u64);
+            let (level, _) = Level::base(&star, &star.options).unwrap();
+            let (_, ring) = (0..level.num_faces())
+                .find_map(|f| reference(&level, f))
+                .expect("a star has Stam's configuration");
+            for i in 5..ring.len() {
+                for j in i + 1..ring.len() {
+                    let (a, b) = (ring[i], ring[j]);
+                    let mut m = star.clone();
+                    let together = (0..m.num_faces()).any(|f| {
+                        let fv = &m.face_verts
+                            [m.face_offsets[f] as usize..m.face_offsets[f + 1] as usize];
+                        fv.contains(&a) && fv.contains(&b)
+                    });
+                    // No shared neighbour either (the merge would join two edges).
+                    let nbrs = |x: u32| {
+                        let mut out = Vec::new();
+                        for f in 0..m.num_faces() {
+                            let fv = &m.face_verts
+                                [m.face_offsets[f] as usize..m.face_offsets[f + 1] as usize];
+                            if let Some(k) = fv.iter().position(|&y| y == x) {
+                                out.push(fv[(k + 1) % fv.len()]);
+                                out.push(fv[(k + fv.len() - 1) % fv.len()]);
+                            }
+                        }
+                        out
+                    };
+                    let (na, nb) = (nbrs(a), nbrs(b));
+                    if !together && !na.iter().any(|x| nb.contains(x)) {
+                        m.face_verts
+                            .iter_mut()
+                            .filter(|v| **v == b)
+                            .for_each(|v| *v = a);
+                        meshes.push(m);
+                    }
+                }
+            }
+        }
+        let mut rng = SplitMix64::new(5);
+        let (mut found, mut refused) = (0, 0);
+        for (i, mesh) in meshes.iter().enumerate() {
+            let Ok((mut level, _)) = Level::base(mesh, &mesh.options) else {
+                continue;
+            };
+            if i >= merged {
+                // A merged vertex is non-manifold, so sharp, which refuses every configuration
+                // it is in before the sharing is looked at: its tag is cleared here.
+                level.vertex_sharpness.fill(0.0);
+            }
+            for depth in 0..3 {
+                // Every third level of every other mesh with random tags.
+                if (i + depth) % 3 == 2 {
+                    for x in level.edge_sharpness.iter_mut() {
+                        if rng.next_f64() < 0.05 {
+                            *x = (rng.next_f64() * 3.0) as f32;
+                        }
+                    }
+                    for x in level.vertex_sharpness.iter_mut() {
+                        if rng.next_f64() < 0.03 {
+                            *x = 1.5;
+                        }
+                    }
+                }
+                for f in 0..level.num_faces() {
+                    let want = reference(&level, f);
+                    assert_eq!(gather(&level, f), want, "mesh {i}, level {depth}, face {f}");
+                    match want {
+                        Some(_) => found += 1,
+                        None => refused += 1,
+                    }
+                }
+                level = step::refine(&level, mesh.options.crease_method).0;
+            }
+        }
+        assert!(
+            found > 1000 && refused > 1000,
+            "{found} found, {refused} refused"
+        );
     }
 
     /// `star(n, 3)` with jittered positions and each face's vertex list rotated by its index
