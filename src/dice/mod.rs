@@ -614,9 +614,10 @@ impl Prepared<'_> {
                             domain = Some((at.face, at.k));
                             scratch.kept.clear();
                         }
-                        // Without normals, positions alone where the run's domain is one
-                        // B-spline patch (the same bits).
-                        if with_normals || !table.eval_points_p(mine, &mut scratch.points)? {
+                        // Without normals, positions alone (the same bits).
+                        if with_normals
+                            || !table.eval_points_p(mine, &mut scratch.kept, &mut scratch.points)?
+                        {
                             table.eval_d1_points(mine, &mut scratch.kept, &mut scratch.points)?;
                         }
                     }

@@ -82,81 +82,83 @@ impl PatchTable {
         );
         for (n, (p, s, t)) in leaves.into_iter().enumerate() {
             let (i, j) = (n % (nu as usize - 1) + 1, n / (nu as usize - 1) + 1);
-            let patch = &self.patches[p as usize];
-            let frame = patch.frame();
-            let pt = match patch.kind {
-                PatchKind::BSpline { .. } => {
-                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(
-                        (p, 0),
-                        s,
-                        || {
-                            contract::<D1>(&self.grid(patch), &bspline::basis(s), || {
-                                bspline::basis_d1(s)
-                            })
-                        },
-                    );
-                    if !D1 {
-                        out(alone(bspline::finish_v_p(&rows.0, &bspline::basis(t))));
-                        continue;
-                    }
-                    bspline::finish_v(rows, &bspline::basis(t), &bspline::basis_d1(t))
-                }
-                PatchKind::SingleCrease { edge, sharpness } => {
-                    let curve = kept.curve(p, sharpness as f64);
-                    let edge = edge as usize;
-                    let rows = Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(
-                        (p, 0),
-                        s,
-                        || {
-                            let bu = single_crease::basis_u(edge, curve, s, t);
-                            contract::<D1>(&self.grid(patch), &bu.w, || bu.d1)
-                        },
-                    );
-                    let bv = single_crease::basis_v(edge, curve, s, t);
-                    if !D1 {
-                        out(alone(bspline::finish_v_p(&rows.0, &bv.w)));
-                        continue;
-                    }
-                    bspline::finish_v(rows, &bv.w, &bv.d1)
-                }
-                // A Stam patch's point in a regular sub-patch (not at the extraordinary
-                // corner): `leaf_d1`'s steps, with the sub-patch's rows shared.
-                PatchKind::Stam { valence, corner } => {
-                    let basis = self.stam_basis(valence);
-                    let first = patch.first_point as usize;
-                    let cps = &self.points[first..first + basis.size];
-                    let (rot, s1, t1) = stam_corner(corner, s, t);
-                    let located = match s1 == 0.0 && t1 == 0.0 {
-                        true => None,
-                        false => stam::locate(s1, t1),
-                    };
-                    let Some((m, q, s2, t2, sub)) = located else {
-                        out(self.leaf_d1(p, frame, s, t, &mut kept));
-                        continue;
-                    };
-                    let frame = frame.then(&rot.then(&sub.child(q)));
-                    let key = (p, 1 + (m as u32) * 4 + q as u32);
-                    let rows =
-                        Rows::of(&frame, (&mut by_column[i], &mut by_row[j])).get(key, s2, || {
-                            let grid = kept.stam_grid(p, basis, (m, q), cps);
-                            contract::<D1>(&grid, &bspline::basis(s2), || bspline::basis_d1(s2))
-                        });
-                    if !D1 {
-                        out(alone(bspline::finish_v_p(&rows.0, &bspline::basis(t2))));
-                        continue;
-                    }
-                    let pt = bspline::finish_v(rows, &bspline::basis(t2), &bspline::basis_d1(t2));
-                    out(frame.face_point_d1(pt));
-                    continue;
-                }
-                _ => {
-                    out(self.leaf_d1(p, frame, s, t, &mut kept));
-                    continue;
-                }
-            };
-            out(frame.face_point_d1(pt));
+            let slots = (&mut by_column[i], &mut by_row[j]);
+            out(self.leaf_point::<D1>(p, s, t, slots, &mut kept));
         }
         true
+    }
+
+    /// The point at `(s, t)` of leaf `p` as [`Self::eval_d1`] gives it (the same bits), with
+    /// the derivatives (`D1`) or the position alone (zero derivatives). A B-spline,
+    /// single-crease or Stam sub-patch leaf's rows contracted along its `s` are kept in one
+    /// of `slots` (the first where the leaf's `s` runs along the domain's `u`, else the
+    /// second) for the next points of the same leaf and `s`; other leaves are evaluated whole,
+    /// their parts kept in `kept`.
+    #[inline(always)]
+    fn leaf_point<const D1: bool>(
+        &self,
+        p: u32,
+        s: f64,
+        t: f64,
+        slots: (&mut Rows, &mut Rows),
+        kept: &mut Kept,
+    ) -> PointD1 {
+        let patch = &self.patches[p as usize];
+        let frame = patch.frame();
+        let pt = match patch.kind {
+            PatchKind::BSpline { .. } => {
+                let rows = Rows::of(&frame, slots).get((p, 0), s, || {
+                    contract::<D1>(&self.grid(patch), &bspline::basis(s), || {
+                        bspline::basis_d1(s)
+                    })
+                });
+                if !D1 {
+                    return alone(bspline::finish_v_p(&rows.0, &bspline::basis(t)));
+                }
+                bspline::finish_v(rows, &bspline::basis(t), &bspline::basis_d1(t))
+            }
+            PatchKind::SingleCrease { edge, sharpness } => {
+                let curve = kept.curve(p, sharpness as f64);
+                let edge = edge as usize;
+                let rows = Rows::of(&frame, slots).get((p, 0), s, || {
+                    let bu = single_crease::basis_u(edge, curve, s, t);
+                    contract::<D1>(&self.grid(patch), &bu.w, || bu.d1)
+                });
+                let bv = single_crease::basis_v(edge, curve, s, t);
+                if !D1 {
+                    return alone(bspline::finish_v_p(&rows.0, &bv.w));
+                }
+                bspline::finish_v(rows, &bv.w, &bv.d1)
+            }
+            // A Stam patch's point in a regular sub-patch (not at the extraordinary corner):
+            // `leaf_d1`'s steps, with the sub-patch's rows shared.
+            PatchKind::Stam { valence, corner } => {
+                let basis = self.stam_basis(valence);
+                let first = patch.first_point as usize;
+                let cps = &self.points[first..first + basis.size];
+                let (rot, s1, t1) = stam_corner(corner, s, t);
+                let located = match s1 == 0.0 && t1 == 0.0 {
+                    true => None,
+                    false => stam::locate(s1, t1),
+                };
+                let Some((m, q, s2, t2, sub)) = located else {
+                    return self.leaf_d1(p, frame, s, t, kept);
+                };
+                let frame = frame.then(&rot.then(&sub.child(q)));
+                let key = (p, 1 + (m as u32) * 4 + q as u32);
+                let rows = Rows::of(&frame, slots).get(key, s2, || {
+                    let grid = kept.stam_grid(p, basis, (m, q), cps);
+                    contract::<D1>(&grid, &bspline::basis(s2), || bspline::basis_d1(s2))
+                });
+                if !D1 {
+                    return alone(bspline::finish_v_p(&rows.0, &bspline::basis(t2)));
+                }
+                let pt = bspline::finish_v(rows, &bspline::basis(t2), &bspline::basis_d1(t2));
+                return frame.face_point_d1(pt);
+            }
+            _ => return self.leaf_d1(p, frame, s, t, kept),
+        };
+        frame.face_point_d1(pt)
     }
 }
 
@@ -300,21 +302,47 @@ impl PatchTable {
     }
 
     /// [`Self::eval_d1_points`]'s positions alone (zero derivatives), the same bits, appended
-    /// to `out`, where the points all lie in one domain that is one B-spline patch;
-    /// `Ok(false)`, with nothing appended, elsewhere.
+    /// to `out`, where the points all lie in one exact domain: where it is one B-spline
+    /// patch, its control points gathered once and no leaf looked up; elsewhere each point's
+    /// leaf looked up and, as in a domain's lattice ([`Self::eval_domain_lattice_with`]),
+    /// a B-spline, single-crease or Stam sub-patch leaf's point summed without derivatives
+    /// (the rows along its `s` kept for the next point of the same leaf and `s`), other
+    /// points evaluated whole (their leaves' parts kept in `kept`). `Ok(false)`, with nothing
+    /// appended, where the points are not all in one exact domain or one lies in a hole
+    /// (point-by-point evaluation then names it).
     pub(crate) fn eval_points_p(
         &self,
         coords: &[FaceCoord],
+        kept: &mut Kept,
         out: &mut Vec<PointD1>,
     ) -> crate::error::Result<bool> {
-        let Some(patch) = self.one_bspline_domain(coords) else {
-            return Ok(false);
+        let Some(a) = coords.first() else {
+            return Ok(true);
         };
+        let (face, k) = (a.face, a.k);
+        if !coords.iter().all(|c| (c.face, c.k) == (face, k))
+            || !self.exact_domain(face as usize, k as usize)
+        {
+            return Ok(false);
+        }
         for &at in coords {
             self.check(at)?;
         }
-        let uv = coords.iter().map(|c| [c.u, c.v]);
-        bspline::eval_points_p(&self.grid(patch), uv, |p| out.push(alone(p)));
+        if let Some(patch) = self.bspline_root(face as usize, k as usize) {
+            let uv = coords.iter().map(|c| [c.u, c.v]);
+            bspline::eval_points_p(&self.grid(patch), uv, |p| out.push(alone(p)));
+            return Ok(true);
+        }
+        let start = out.len();
+        let (mut along_u, mut along_v) = (Rows::EMPTY, Rows::EMPTY);
+        for &at in coords {
+            let Some((p, s, t)) = self.find_leaf_unframed(at) else {
+                out.truncate(start);
+                return Ok(false);
+            };
+            let slots = (&mut along_u, &mut along_v);
+            out.push(self.leaf_point::<false>(p, s, t, slots, kept));
+        }
         Ok(true)
     }
 
