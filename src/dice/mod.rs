@@ -36,7 +36,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
 use crate::oct::oct_encode_all;
 use crate::patch::bspline::PointD1;
-use crate::patch::table::Kept;
+use crate::patch::table::{Kept, LeafLevels};
 use crate::patch::PatchTable;
 use crate::refine::crease;
 use crate::refine::Level;
@@ -1120,7 +1120,7 @@ impl DomainCtx<'_> {
         // A domain that is one patch has one level (no lookup per triangle); elsewhere the last
         // leaf's bounds and level serve the next triangles whose centres lie strictly inside.
         let whole = self.table.domain_level(f, k);
-        let mut leaf: Option<([f64; 4], u8)> = None;
+        let mut leaf: Option<LeafLevels> = None;
         // Lean dicing writes of its grid triangles neither corners (the grid build reads the
         // frame) nor records, only the levels, apart, a leaf's run of quads at a time, and not
         // even those where the domain is one patch (its grid region carries the level).
@@ -1149,40 +1149,40 @@ impl DomainCtx<'_> {
         Ok(())
     }
 
-    /// The level at triangle centre `[cu, cv]` of domain `(f, k)`: the last leaf's (`leaf`,
-    /// its bounds and level) when the centre lies strictly inside it, else looked up
-    /// ([`PatchTable::level_and_extent`]), the leaf kept.
+    /// The level at triangle centre `[cu, cv]` of domain `(f, k)`: from the last leaf
+    /// (`leaf`, [`LeafLevels`]) when the centre lies strictly inside it, else looked up
+    /// ([`PatchTable::leaf_levels`]), the leaf kept.
     #[inline(always)]
     fn centre_level(
         &self,
         f: usize,
         k: usize,
         [cu, cv]: [f64; 2],
-        leaf: &mut Option<([f64; 4], u8)>,
+        leaf: &mut Option<LeafLevels>,
     ) -> Result<u8> {
-        match *leaf {
-            Some(([u0, v0, u1, v1], l)) if u0 < cu && cu < u1 && v0 < cv && cv < v1 => Ok(l),
-            _ => {
-                let at = FaceCoord::new(f as u32, k as u32, cu, cv);
-                let (l, extent) = self.table.level_and_extent(at)?;
-                *leaf = extent.map(|e| (e, l));
-                Ok(l)
-            }
+        if let Some(l) = leaf.and_then(|leaf| leaf.level(cu, cv)) {
+            return Ok(l);
         }
+        let at = FaceCoord::new(f as u32, k as u32, cu, cv);
+        let (l, found) = self.table.leaf_levels(at)?;
+        *leaf = found;
+        Ok(l)
     }
 
     /// The levels of the grid triangles of domain `(f, k)` (grid `g` of pattern `pat`) into
     /// `levels`, each [`Self::centre_level`]'s: a quad whose box lies in the closed bounds of
-    /// the leaf found for its first triangle has its centres strictly inside (at least a third
-    /// of a quad from its sides, far beyond the rounding of the bounds), so that leaf's level
-    /// is given at once to it and to the quads after it in its row that lie in the leaf too.
+    /// the leaf found for its first triangle, where that leaf has one level, has its centres
+    /// strictly inside (at least a third of a quad from its sides, far beyond the rounding of
+    /// the bounds), so that level is given at once to it and to the quads after it in its row
+    /// that lie in the leaf too. In a Stam leaf each centre's level follows from its
+    /// coordinates.
     fn grid_levels(
         &self,
         f: usize,
         k: usize,
         pat: &Pattern,
         g: GridPart,
-        leaf: &mut Option<([f64; 4], u8)>,
+        leaf: &mut Option<LeafLevels>,
         levels: &mut [u8],
     ) -> Result<()> {
         let [qc, qr] = g.quads.map(|q| q as usize);
@@ -1196,7 +1196,7 @@ impl DomainCtx<'_> {
                 let ti = 2 * (y * qc + x);
                 let l = self.centre_level(f, k, pat.tri_centre[ti], leaf)?;
                 match *leaf {
-                    Some(([u0, v0, u1, v1], _))
+                    Some(LeafLevels::Square([u0, v0, u1, v1], _))
                         if v0 <= vlo && vhi <= v1 && u0 <= u(x) && u(x + 1) <= u1 =>
                     {
                         let mut end = x + 1;

@@ -260,31 +260,43 @@ impl PatchTable {
         Ok(self.eval(at)?.level)
     }
 
-    /// [`Self::level_at`], with bounds `[u0, v0, u1, v1]` around `at` within which the level
-    /// is the same: the leaf's square where the level is the leaf's own (a B-spline or
-    /// single-crease leaf), the square of the regular sub-patch holding `at` in a Stam leaf
-    /// (whose level is the leaf's plus that sub-patch's depth). Every point strictly inside
-    /// the bounds has the level: the descents classify points exactly (each step subtracts a
-    /// corner and doubles, exact operations on these values), so a point strictly inside a
-    /// square reaches it. Dicing reuses the level for the next triangles whose centres lie
-    /// inside (no lookup each).
+    /// [`Self::level_at`], with the leaf around `at` where the levels of the points strictly
+    /// inside it follow without a lookup ([`LeafLevels`]): the leaf's square with its level
+    /// where the level is the leaf's own (a B-spline or single-crease leaf); a Stam leaf's
+    /// square, whose points' levels are the leaf's plus the depth of their sub-patch. A point
+    /// strictly inside a leaf's square reaches that leaf: the descents classify points exactly
+    /// (each step subtracts a corner and doubles, exact operations on these values). Dicing
+    /// reuses the leaf for the next triangles whose centres lie inside (no lookup each).
     #[inline]
-    pub fn level_and_extent(&self, at: FaceCoord) -> Result<(u8, Option<[f64; 4]>)> {
+    pub fn leaf_levels(&self, at: FaceCoord) -> Result<(u8, Option<LeafLevels>)> {
         if !self.is_approximate() && self.loop_surface.is_none() && self.check(at).is_ok() {
             if let Some((p, frame, s, t)) = self.descend_to_leaf::<true>(at) {
                 let patch = &self.patches[p as usize];
+                let square = square(&frame);
                 match patch.kind {
                     PatchKind::BSpline { .. } | PatchKind::SingleCrease { .. } => {
-                        return Ok((patch.level, Some(square(&frame))));
+                        return Ok((patch.level, Some(LeafLevels::Square(square, patch.level))));
                     }
                     PatchKind::Stam { corner, .. } => {
-                        let (rot, s1, t1) = stam_corner(corner, s, t);
-                        if s1 != 0.0 || t1 != 0.0 {
-                            if let Some((m, q, _, _, sub)) = stam::locate(s1, t1) {
-                                let box_frame = frame.then(&rot).then(&sub.child(q));
-                                return Ok((patch.level + m as u8, Some(square(&box_frame))));
-                            }
-                        }
+                        let side = square[2] - square[0];
+                        let leaf = LeafLevels::Stam {
+                            square,
+                            origin: frame.o,
+                            to_s: frame.a.map(|x| x / (side * side)),
+                            to_t: frame.b.map(|x| x / (side * side)),
+                            level: patch.level,
+                            corner,
+                        };
+                        // A power-of-two side (as every leaf's is) along the axes: the leaf
+                        // coordinates of the points inside follow exactly.
+                        let dyadic = side > 0.0 && side.log2().fract() == 0.0;
+                        let aligned = [frame.a, frame.b].iter().all(|x| {
+                            (x[0] == 0.0 && x[1].abs() == side)
+                                || (x[1] == 0.0 && x[0].abs() == side)
+                        });
+                        let (_, s1, t1) = stam_corner(corner, s, t);
+                        let level = patch.level + stam::depth(s1, t1);
+                        return Ok((level, (dyadic && aligned).then_some(leaf)));
                     }
                     PatchKind::EndCap => {}
                 }
@@ -417,6 +429,74 @@ impl LeafParts for Recent {
 
 /// The bounds `[u0, v0, u1, v1]` of frame `f`'s unit square: its corners `o`, `o + a`,
 /// `o + b`, `o + a + b` (dyadic, so exact).
+/// A leaf found by [`PatchTable::leaf_levels`], with what gives the levels of the points
+/// strictly inside its square `[u0, v0, u1, v1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LeafLevels {
+    /// A leaf whose points all have its level.
+    Square([f64; 4], u8),
+    /// A Stam leaf: a point's level is the leaf's plus the depth of the sub-patch holding it,
+    /// from its coordinates in the leaf (its frame's: from the leaf's corner `origin`, `s`
+    /// and `t` grow by `to_s` and `to_t` per unit of `u` and `v`, each one component `±1 /
+    /// side` and the other zero).
+    Stam {
+        /// The leaf's square.
+        square: [f64; 4],
+        /// The frame's origin.
+        origin: [f64; 2],
+        /// `s` per unit of `u` and of `v`.
+        to_s: [f64; 2],
+        /// `t` per unit of `u` and of `v`.
+        to_t: [f64; 2],
+        /// The leaf's level.
+        level: u8,
+        /// Its extraordinary corner.
+        corner: u8,
+    },
+}
+
+impl LeafLevels {
+    /// The leaf's square.
+    pub fn square(&self) -> [f64; 4] {
+        match *self {
+            LeafLevels::Square(square, _) | LeafLevels::Stam { square, .. } => square,
+        }
+    }
+
+    /// The level [`PatchTable::level_at`] gives at `(u, v)` of the leaf's domain, for a point
+    /// strictly inside the leaf's square; `None` outside.
+    #[inline]
+    pub fn level(&self, u: f64, v: f64) -> Option<u8> {
+        let [u0, v0, u1, v1] = self.square();
+        if !(u0 < u && u < u1 && v0 < v && v < v1) {
+            return None;
+        }
+        match *self {
+            LeafLevels::Square(_, level) => Some(level),
+            LeafLevels::Stam {
+                origin: [ou, ov],
+                to_s,
+                to_t,
+                level,
+                corner,
+                ..
+            } => {
+                // The descent's leaf coordinates, exactly: a descent step subtracts a corner
+                // only from a coordinate at least 1/2 and doubles, so each point's leaf
+                // coordinates are exact images of `(u, v)`; here `u − ou` and `v − ov` are
+                // those images scaled by the side (representable, so computed exactly), and
+                // each is scaled back by a signed power of two of at least 1 (exact, no
+                // underflow), plus a zero.
+                let (du, dv) = (u - ou, v - ov);
+                let s = du * to_s[0] + dv * to_s[1];
+                let t = du * to_t[0] + dv * to_t[1];
+                let (_, s1, t1) = stam_corner(corner, s, t);
+                Some(level + stam::depth(s1, t1))
+            }
+        }
+    }
+}
+
 fn square(f: &Frame) -> [f64; 4] {
     let ends = |i: usize| {
         let c = [
@@ -502,48 +582,60 @@ pub(super) mod tests {
         assert!(whole > 1000, "only {whole} samples in whole-patch domains");
     }
 
-    /// `level_and_extent` gives `level_at`'s level, and where it gives bounds, every point
-    /// strictly inside them (random ones, and ones a rounding step inside the corners) has
-    /// that level and lies in the same leaf; the bounds are a dyadic square of the domain.
-    /// Stam leaves give bounds too (their sub-patches' squares).
+    /// `leaf_levels` gives `level_at`'s level, and where it gives a leaf, every point strictly
+    /// inside the leaf's square (random ones, and ones a rounding step inside the corners)
+    /// lies in that leaf and has the level the leaf gives it, `level_at`'s; the square is a
+    /// dyadic square of the domain. Stam leaves are among them.
     #[test]
-    fn level_extent_holds_one_level() {
+    fn leaf_levels_are_the_levels_inside() {
         let mut rng = SplitMix64(23);
-        let mut bounded = 0;
+        let (mut bounded, mut stam, mut inside_stam) = (0, 0, 0);
         for table in tables() {
             for _ in 0..3000 {
                 let at = random_point(&mut rng, &table);
-                let (level, extent) = table.level_and_extent(at).unwrap();
+                let (level, leaf) = table.leaf_levels(at).unwrap();
                 assert_eq!(Ok(level), table.level_at(at), "{at:?}");
-                let Some([u0, v0, u1, v1]) = extent else {
+                let Some(leaf) = leaf else {
                     continue;
                 };
                 bounded += 1;
+                let stam_leaf = matches!(leaf, super::LeafLevels::Stam { .. });
+                stam += usize::from(stam_leaf);
+                let [u0, v0, u1, v1] = leaf.square();
                 assert!(
                     u0 <= at.u && at.u <= u1 && v0 <= at.v && at.v <= v1,
                     "{at:?}"
                 );
                 let side = u1 - u0;
                 assert!(side > 0.0 && side == v1 - v0 && side.log2().fract() == 0.0);
-                let leaf = table.find_leaf(at).map(|l| l.0);
+                let found = table.find_leaf(at).map(|l| l.0);
                 let up = |x: f64| x.next_up();
                 let down = |x: f64| x.next_down();
                 let mut inside = vec![(up(u0), up(v0)), (down(u1), down(v1)), (up(u0), down(v1))];
-                for _ in 0..4 {
+                for _ in 0..8 {
                     let (x, y) = (rng.next_f64(), rng.next_f64());
                     inside.push((u0 + x * side, v0 + y * side));
+                    // Near the leaf's corners too, where Stam's sub-patches are small.
+                    inside.push((u0 + x * x * x * side, v0 + y * y * y * side));
+                    inside.push((u1 - x * x * x * side, v1 - y * y * y * side));
                 }
                 for (u, v) in inside {
                     if !(u0 < u && u < u1 && v0 < v && v < v1) {
+                        assert_eq!(leaf.level(u, v), None);
                         continue;
                     }
                     let p = FaceCoord::new(at.face, at.k, u, v);
-                    assert_eq!(table.level_at(p), Ok(level), "{p:?} in {extent:?}");
-                    assert_eq!(table.find_leaf(p).map(|l| l.0), leaf, "{p:?} in {extent:?}");
+                    assert_eq!(leaf.level(u, v).map(Ok), Some(table.level_at(p)), "{p:?}");
+                    assert_eq!(table.find_leaf(p).map(|l| l.0), found, "{p:?} in {leaf:?}");
+                    inside_stam += usize::from(stam_leaf);
                 }
             }
         }
-        assert!(bounded > 2500, "only {bounded} samples with bounds");
+        assert!(bounded > 2500, "only {bounded} samples with a leaf");
+        assert!(
+            stam > 100 && inside_stam > 1000,
+            "{stam} Stam leaves, {inside_stam} points"
+        );
     }
 
     /// `eval_d1` is `eval`'s position and first derivatives bit for bit (signs of zeros

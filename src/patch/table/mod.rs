@@ -22,6 +22,7 @@ mod build;
 mod end_cap;
 mod eval;
 mod lattice;
+pub use eval::LeafLevels;
 pub(crate) use lattice::Kept;
 pub mod loop_pieces;
 pub mod pieces;
