@@ -19,7 +19,6 @@ use crate::patch::uv::UvSurface;
 use crate::render::texturing::MaterialTextures;
 use crate::render::World;
 use crate::texture::Texture;
-use crate::FaceCoord;
 
 /// Appends `t`'s record (and an image's texels); returns its offset.
 fn push_texture(w: &mut Vec<u32>, t: &Texture) -> Result<u32> {
@@ -88,15 +87,9 @@ pub fn pack_material_maps(w: &mut Vec<u32>, maps: &[MaterialTextures]) -> Result
 /// The texture coordinates at `(face, k, u, v)`: the limit texture coordinates, or `(u, v)`
 /// without them (or where they cannot be evaluated), as the CPU's hits read them.
 fn st_at(uv: Option<&UvSurface>, face: u32, k: u32, at: [f32; 2]) -> [f32; 2] {
-    let c = FaceCoord::new(
-        face,
-        k,
-        (at[0] as f64).clamp(0.0, 1.0),
-        (at[1] as f64).clamp(0.0, 1.0),
-    );
-    match uv.map(|s| s.eval(c)) {
-        Some(Ok(s)) => [s.st[0] as f32, s.st[1] as f32],
-        _ => [c.u as f32, c.v as f32],
+    match UvSurface::at_hit(uv, face, k, at) {
+        (_, Some(Ok(s))) => [s.st[0] as f32, s.st[1] as f32],
+        (c, _) => [c.u as f32, c.v as f32],
     }
 }
 

@@ -225,7 +225,7 @@ impl Topology {
     }
 
     /// The vertex rings of a topology [`Self::without_rings`] gave, each ordered by walking its
-    /// faces ([`Self::order_ring`]).
+    /// faces around the vertex, from face to face across their shared edges.
     pub fn with_ordered_rings(mut self) -> Self {
         // Vertex -> face corners, unordered (by face, then corner), then ordered.
         let nf = self.num_faces();
@@ -253,7 +253,7 @@ impl Topology {
     /// the edges in `forced` non-manifold whatever their faces (cut-outs of a level keep the
     /// level's non-manifold edges so), up to the vertex rings: edges' faces and tags, and how
     /// many faces each vertex has ([`Self::vert_face_offsets`]). The rings are left empty, for
-    /// [`Self::with_ordered_rings`] (or rings found otherwise, [`Self::set_rings`]).
+    /// [`Self::with_ordered_rings`] (or for rings the caller finds otherwise).
     pub fn without_rings(
         num_vertices: usize,
         face_offsets: Vec<u32>,

@@ -164,9 +164,10 @@ fn walk(
 ///
 /// The canonical configuration guides the gathering: each face walked writes its vertices
 /// into the slots its canonical face names, and a vertex found in a slot already filled must
-/// be the one there. That is [`gather_faces`]' answer followed by the comparison with the
-/// configuration's faces (a test checks that both agree), without searching the gathered
-/// vertices for each face's vertex and without collecting the faces.
+/// be the one there. The answer is the searching one's (the faces walked collected, each
+/// face's vertices found among those gathered, then the faces compared with the
+/// configuration's: a test checks that both agree), without the searches and without
+/// collecting the faces.
 pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
     let (c, ev, n) = stam_corner(level, f)?;
     let topo = &level.topo;

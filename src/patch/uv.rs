@@ -62,6 +62,25 @@ impl UvSurface {
         Ok(Some(UvSurface::Smooth(Box::new(table))))
     }
 
+    /// The texture coordinates a hit at `(u, v)` of domain `(face, k)` reads: the domain point
+    /// (its parameters clamped to the domain, widened to `f64`) and, where the mesh has
+    /// texture coordinates (`uv`), their evaluation there. The CPU's texturing and the GPU's
+    /// per-vertex coordinates both read them so.
+    pub fn at_hit(
+        uv: Option<&UvSurface>,
+        face: u32,
+        k: u32,
+        [u, v]: [f32; 2],
+    ) -> (FaceCoord, Option<Result<UvSample>>) {
+        let at = FaceCoord::new(
+            face,
+            k,
+            (u as f64).clamp(0.0, 1.0),
+            (v as f64).clamp(0.0, 1.0),
+        );
+        (at, uv.map(|s| s.eval(at)))
+    }
+
     /// Texture coordinates and their derivatives at `at`.
     pub fn eval(&self, at: FaceCoord) -> Result<UvSample> {
         match self {

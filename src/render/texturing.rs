@@ -12,7 +12,6 @@
 use super::material::Material;
 use super::scene::{MapDesc, MaterialMaps};
 use crate::bvh::Hit;
-use crate::coord::FaceCoord;
 use crate::error::Result;
 use crate::patch::uv::UvSurface;
 use crate::texture::image::ColorSpace;
@@ -149,13 +148,8 @@ impl InstanceMaps {
         corners: [[f32; 3]; 3],
         uvs: [[f32; 2]; 3],
     ) -> Lookup {
-        let at = FaceCoord::new(
-            hit.face,
-            hit.k,
-            (hit.u as f64).clamp(0.0, 1.0),
-            (hit.v as f64).clamp(0.0, 1.0),
-        );
-        let (st, st_density) = match self.uv.as_ref().map(|uv| uv.eval(at)) {
+        let (at, sample) = UvSurface::at_hit(self.uv.as_deref(), hit.face, hit.k, [hit.u, hit.v]);
+        let (st, st_density) = match sample {
             Some(Ok(s)) => (s.st, (s.du[0] * s.dv[1] - s.du[1] * s.dv[0]).abs()),
             Some(Err(_)) => ([at.u, at.v], 0.0),
             None => ([at.u, at.v], 1.0),
