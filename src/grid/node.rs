@@ -133,13 +133,14 @@ unsafe fn test_quad(
         for a in 0..3 {
             let l = _mm_load_ps(lo[a]);
             let h = _mm_load_ps(hi[a]);
-            let (n, f) = if r.inv[a].is_sign_negative() {
-                (h, l)
-            } else {
-                (l, h)
-            };
             let o = _mm_set1_ps(r.o[a]);
             let inv = _mm_set1_ps(r.inv[a]);
+            // The near and far planes chosen by the sign of `inv` without a branch (which
+            // mispredicted on the first boxes of every incoherent ray): all ones where the
+            // sign bit is set, as `is_sign_negative` reads it.
+            let neg = _mm_castsi128_ps(_mm_srai_epi32::<31>(_mm_castps_si128(inv)));
+            let n = _mm_or_ps(_mm_and_ps(neg, h), _mm_andnot_ps(neg, l));
+            let f = _mm_or_ps(_mm_and_ps(neg, l), _mm_andnot_ps(neg, h));
             let tn = _mm_mul_ps(_mm_sub_ps(n, o), inv);
             let tf = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(f, o), inv), scale);
             near = _mm_max_ps(tn, near);
@@ -248,13 +249,11 @@ pub unsafe fn test8<const AVX2: bool>(b: &Box8, r: &PreparedRay, tmax: f32) -> (
                 for a in 0..3 {
                     let lo = _mm256_load_ps(b.lo[a].as_ptr());
                     let hi = _mm256_load_ps(b.hi[a].as_ptr());
-                    let (n, f) = if r.inv[a].is_sign_negative() {
-                        (hi, lo)
-                    } else {
-                        (lo, hi)
-                    };
                     let o = _mm256_set1_ps(r.o[a]);
                     let inv = _mm256_set1_ps(r.inv[a]);
+                    // Near and far planes by the sign bit of `inv`, without a branch.
+                    let n = _mm256_blendv_ps(lo, hi, inv);
+                    let f = _mm256_blendv_ps(hi, lo, inv);
                     let tn = _mm256_mul_ps(_mm256_sub_ps(n, o), inv);
                     let tf = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(f, o), inv), scale);
                     near = _mm256_max_ps(tn, near);
