@@ -427,8 +427,6 @@ impl LeafParts for Recent {
     }
 }
 
-/// The bounds `[u0, v0, u1, v1]` of frame `f`'s unit square: its corners `o`, `o + a`,
-/// `o + b`, `o + a + b` (dyadic, so exact).
 /// A leaf found by [`PatchTable::leaf_levels`], with what gives the levels of the points
 /// strictly inside its square `[u0, v0, u1, v1]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -497,6 +495,8 @@ impl LeafLevels {
     }
 }
 
+/// The bounds `[u0, v0, u1, v1]` of frame `f`'s unit square: its corners `o`, `o + a`,
+/// `o + b`, `o + a + b` (dyadic, so exact).
 fn square(f: &Frame) -> [f64; 4] {
     let ends = |i: usize| {
         let c = [
