@@ -153,3 +153,38 @@ impl UvSurface {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::shapes;
+
+    /// A hit's texture coordinates are the surface's at its `(face, k, u, v)`, widened and
+    /// clamped to the domain (in that order: `u` then `v`); without texture coordinates the
+    /// domain point alone. On the atlas box, whose tiles make `s` and `t` differ from `u` and
+    /// `v` and from each other.
+    #[test]
+    fn a_hit_reads_the_texture_coordinates_at_its_domain_point() {
+        let mut mesh = shapes::rounded_box(0.0);
+        shapes::atlas_uvs(&mut mesh);
+        let uv = UvSurface::new(&mesh, FVarMode::default()).unwrap().unwrap();
+        for (face, at) in [(0, [0.25f32, 0.75]), (4, [0.6, 0.1]), (2, [-0.5, 1.5])] {
+            let (c, sample) = UvSurface::at_hit(Some(&uv), face, 0, at);
+            let want = FaceCoord::new(
+                face,
+                0,
+                (at[0] as f64).clamp(0.0, 1.0),
+                (at[1] as f64).clamp(0.0, 1.0),
+            );
+            assert_eq!(c, want);
+            let got = sample.unwrap().unwrap();
+            let direct = uv.eval(want).unwrap();
+            assert_eq!((got.st, got.du, got.dv), (direct.st, direct.du, direct.dv));
+            // The transposed point reads other coordinates (so a swap would be seen).
+            let swapped = uv.eval(FaceCoord::new(face, 0, want.v, want.u)).unwrap();
+            assert_ne!(got.st, swapped.st, "face {face} at {at:?}");
+        }
+        let (c, none) = UvSurface::at_hit(None, 3, 0, [1.25, 0.5]);
+        assert_eq!((c, none.is_none()), (FaceCoord::new(3, 0, 1.0, 0.5), true));
+    }
+}
