@@ -142,6 +142,12 @@ impl PatchTable {
                     false => stam::locate(s1, t1),
                 };
                 let Some((m, q, s2, t2, sub)) = located else {
+                    // At the extraordinary corner (or nearer it than the deepest sub-patch)
+                    // the position is the limit point's, whose derivatives `leaf_d1` takes
+                    // from a sub-patch at the deepest level: without them, the limit alone.
+                    if !D1 {
+                        return alone(basis.limit(cps));
+                    }
                     return self.leaf_d1(p, frame, s, t, kept);
                 };
                 let frame = frame.then(&rot.then(&sub.child(q)));
@@ -302,14 +308,17 @@ impl PatchTable {
     }
 
     /// [`Self::eval_d1_points`]'s positions alone (zero derivatives), the same bits, appended
-    /// to `out`, where the points all lie in one exact domain: where it is one B-spline
-    /// patch, its control points gathered once and no leaf looked up; elsewhere each point's
-    /// leaf looked up and, as in a domain's lattice ([`Self::eval_domain_lattice_with`]),
-    /// a B-spline, single-crease or Stam sub-patch leaf's point summed without derivatives
-    /// (the rows along its `s` kept for the next point of the same leaf and `s`), other
-    /// points evaluated whole (their leaves' parts kept in `kept`). `Ok(false)`, with nothing
-    /// appended, where the points are not all in one exact domain or one lies in a hole
-    /// (point-by-point evaluation then names it).
+    /// to `out`, where the points lie in exact domains: where they all lie in one that is
+    /// one B-spline patch, its control points gathered once and no leaf looked up; elsewhere
+    /// each point's leaf looked up and, as in a domain's lattice
+    /// ([`Self::eval_domain_lattice_with`]), a B-spline, single-crease or Stam sub-patch
+    /// leaf's point summed without derivatives (the rows along its `s` kept for the next
+    /// point of the same leaf and `s`), other
+    /// points evaluated whole (their leaves' parts kept in `kept`); the points of a run may
+    /// lie in several domains (a side of an n-gon's sub-face runs on into the next
+    /// sub-face), each found in its own. `Ok(false)`, with nothing appended, where a point
+    /// is not in an exact domain or lies in a hole (point-by-point evaluation then names
+    /// it).
     pub(crate) fn eval_points_p(
         &self,
         coords: &[FaceCoord],
@@ -320,15 +329,20 @@ impl PatchTable {
             return Ok(true);
         };
         let (face, k) = (a.face, a.k);
-        if !coords.iter().all(|c| (c.face, c.k) == (face, k))
-            || !self.exact_domain(face as usize, k as usize)
+        if !coords
+            .iter()
+            .all(|c| self.exact_domain(c.face as usize, c.k as usize))
         {
             return Ok(false);
         }
         for &at in coords {
             self.check(at)?;
         }
-        if let Some(patch) = self.bspline_root(face as usize, k as usize) {
+        let one = coords.iter().all(|c| (c.face, c.k) == (face, k));
+        if let Some(patch) = one
+            .then(|| self.bspline_root(face as usize, k as usize))
+            .flatten()
+        {
             let uv = coords.iter().map(|c| [c.u, c.v]);
             bspline::eval_points_p(&self.grid(patch), uv, |p| out.push(alone(p)));
             return Ok(true);
