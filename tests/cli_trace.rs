@@ -175,8 +175,9 @@ fn accuracy_and_bench_print_json() {
     assert_eq!(v["warm"], 0);
     // With --stages (after two warm builds): the measured build's stages in order, table,
     // dicing, then grid, adding up to no more than the three parts' times (the JSON rounds
-    // those to 0.1 ms and the stages to 0.01: 0.15 + 0.09 ms at most for the cube's 17
-    // stages); the warm builds' stages are not among them.
+    // those to 0.1 ms and the stages to 0.01: 0.15 + 0.10 ms at most for the cube's 19
+    // stages, its refinement's three among them); the warm builds' stages are not among
+    // them.
     let v = bench(&["--stages", "--warm", "2"]);
     assert_eq!(v["warm"], 2);
     assert_eq!(v["triangles"], 6 * 2 * 16);
@@ -189,6 +190,9 @@ fn accuracy_and_bench_print_json() {
     );
     for name in [
         "table: level 0",
+        "table: refinement: cut-outs",
+        "table: refinement: steps",
+        "table: refinement: patches",
         "dice: shared points",
         "dice: domains and their stores",
         "grid: block plans",

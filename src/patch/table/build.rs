@@ -695,6 +695,7 @@ impl PatchTable {
             // Two rings around the seeds support the stencils; the first is refined (its
             // children hold the next level's two rings around the seeds' children).
             let (sub, old, seed_new, inner) = extract_faces_within(level, &seeds, 2);
+            crate::stages::mark("table: refinement: cut-outs");
             let (mut child, t) = step::refine_inner(&sub, inner, method);
             // Follow each edit's path one level down; apply the edits that act here.
             let mut edits_here = Vec::new();
@@ -747,6 +748,7 @@ impl PatchTable {
                     job_slots.push(s);
                 }
             }
+            crate::stages::mark("table: refinement: steps");
             let mut next = Vec::new();
             let mut caps = Vec::new();
             for p in table.settle_all(&child, child_offset, &jobs, |i| job_slots[i], depth) {
@@ -760,8 +762,8 @@ impl PatchTable {
             }
             refined = Some(child);
             pending = next;
+            crate::stages::mark("table: refinement: patches");
         }
-        crate::stages::mark("table: refinement");
         drop(refined);
         // Dicing reads level 0 too: kept unless edits at level 0 changed its tags or holes.
         if mesh.edits.iter().all(|e| e.level() > 0) {
