@@ -149,7 +149,7 @@ pub(super) fn rates_for(
         let plain = (0..=MEASURE_SEGMENTS)
             .map(|i| {
                 let (k, u, v) = points(i as f64 / MEASURE_SEGMENTS as f64);
-                Ok(table.eval(FaceCoord::new(f as u32, k, u, v))?.p)
+                table.position(FaceCoord::new(f as u32, k, u, v))
             })
             .collect::<Result<Vec<_>>>()?;
         let Some(d) = displacer else {

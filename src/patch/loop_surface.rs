@@ -317,6 +317,13 @@ impl LoopSurface {
         eval_sub_quad(at, |u, v| self.eval(FaceCoord::new(at.face, 0, u, v)))
     }
 
+    /// [`Self::eval_sub_quad`]'s position alone, the same bits ([`Self::position`]: no
+    /// secants at an irregular vertex).
+    pub fn position_sub_quad(&self, at: FaceCoord) -> Result<[f64; 3]> {
+        let ([u, v], _) = sub_quad_triangle_uv(at)?;
+        self.position(FaceCoord::new(at.face, 0, u, v))
+    }
+
     /// [`Sample::level`] of [`Self::eval`] at `at`, from the face's tree alone where the point
     /// is in a regular patch (an evaluation, without the vertex secants, in a cap).
     pub fn level_at(&self, at: FaceCoord) -> Result<u8> {
@@ -586,23 +593,8 @@ pub fn check_triangle_coord(at: FaceCoord, faces: usize) -> Result<()> {
 /// respect to `(s, t)` by the chain rule through the bilinear map: how every triangle
 /// surface (exact or approximate) is diced, as three quads.
 pub fn eval_sub_quad(at: FaceCoord, eval: impl Fn(f64, f64) -> Result<Sample>) -> Result<Sample> {
-    if at.k > 2 {
-        return Err(Error::new(
-            ErrorKind::Usage,
-            format!(
-                "face {}: a triangle has sub-quads 0..=2, not {}",
-                at.face, at.k
-            ),
-        ));
-    }
-    if !(0.0..=1.0).contains(&at.u) || !(0.0..=1.0).contains(&at.v) {
-        return Err(Error::new(
-            ErrorKind::Usage,
-            format!("(u, v) = ({}, {}) is outside [0, 1]²", at.u, at.v),
-        ));
-    }
-    let ([u, v], [ds, dt, dst]) = LoopSurface::sub_quad_uv(at.k as usize, at.u, at.v);
-    let r = eval(u.min(1.0 - v), v)?;
+    let ([u, v], [ds, dt, dst]) = sub_quad_triangle_uv(at)?;
+    let r = eval(u, v)?;
     let lin = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| [0, 1, 2].map(|i| a[i] * x + b[i] * y);
     let quad = |x: [f64; 2], y: [f64; 2]| {
         [0, 1, 2].map(|i| {
@@ -620,6 +612,29 @@ pub fn eval_sub_quad(at: FaceCoord, eval: impl Fn(f64, f64) -> Result<Sample>) -
         dvv: quad(dt, dt),
         level: r.level + 1,
     })
+}
+
+/// The triangle parameter `(u, v)` of sub-quad point `at` (the bilinear map of
+/// [`LoopSurface::sub_quad_uv`], `u` kept within the triangle) and the map's derivatives;
+/// errors for a sub-quad or parameter out of range.
+fn sub_quad_triangle_uv(at: FaceCoord) -> Result<([f64; 2], [[f64; 2]; 3])> {
+    if at.k > 2 {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!(
+                "face {}: a triangle has sub-quads 0..=2, not {}",
+                at.face, at.k
+            ),
+        ));
+    }
+    if !(0.0..=1.0).contains(&at.u) || !(0.0..=1.0).contains(&at.v) {
+        return Err(Error::new(
+            ErrorKind::Usage,
+            format!("(u, v) = ({}, {}) is outside [0, 1]²", at.u, at.v),
+        ));
+    }
+    let ([u, v], d) = LoopSurface::sub_quad_uv(at.k as usize, at.u, at.v);
+    Ok(([u.min(1.0 - v), v], d))
 }
 
 fn point(local: &LocalMesh, i: u32) -> [f64; 3] {

@@ -39,6 +39,17 @@ impl PatchTable {
         })
     }
 
+    /// [`Self::eval`]'s position alone, the same bits. On an exact Loop surface it skips the
+    /// secants that stand in for the derivatives at an irregular vertex (two descents 24
+    /// levels deep: [`crate::patch::LoopSurface::position`]); elsewhere it is the evaluation's
+    /// position.
+    pub fn position(&self, at: FaceCoord) -> Result<[f64; 3]> {
+        match (&self.approx, &self.loop_surface) {
+            (None, Some(surface)) => surface.position_sub_quad(at),
+            _ => Ok(self.eval(at)?.p),
+        }
+    }
+
     /// [`Self::eval`]'s position and first derivatives, the same bits, without the second
     /// derivatives' work where the leaf is a B-spline patch (what dicing needs).
     pub fn eval_d1(&self, at: FaceCoord) -> Result<PointD1> {
@@ -660,5 +671,64 @@ pub(super) mod tests {
                 assert_eq!(d1.ok(), full.ok(), "{at:?}");
             }
         }
+    }
+
+    /// `position` is `eval`'s position bit for bit, and refuses what `eval` refuses: on exact
+    /// Loop surfaces (the blob's irregular vertices among them: every sub-quad's corners,
+    /// its edges' points and random interior points), an approximate Loop surface and
+    /// Catmull-Clark tables; out-of-range sub-quads and parameters are errors both ways.
+    #[test]
+    fn position_is_the_evaluations() {
+        use crate::mesh::{shapes, Scheme};
+        use crate::patch::approx::Approximation;
+        let mut loop_blob = shapes::blob();
+        loop_blob.options.scheme = Scheme::Loop;
+        let mut loop_box = shapes::triangulated(&shapes::rounded_box(2.0));
+        loop_box.options.scheme = Scheme::Loop;
+        let mut all: Vec<PatchTable> = vec![
+            PatchTable::new(&loop_blob, PatchOptions::default()).unwrap(),
+            PatchTable::new(
+                &loop_blob,
+                PatchOptions {
+                    surface: Approximation::Gregory,
+                    ..PatchOptions::default()
+                },
+            )
+            .unwrap(),
+        ];
+        all.push(PatchTable::new(&loop_box, PatchOptions::default()).unwrap());
+        all.extend(tables());
+        let mut r = SplitMix64::new(3);
+        let mut checked = 0;
+        for table in &all {
+            for face in 0..table.num_faces() as u32 {
+                for k in 0..table.sub_faces(face as usize) as u32 {
+                    let mut at = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, 0.0]];
+                    at.extend((0..4).map(|_| [r.next_f64(), r.next_f64()]));
+                    for [u, v] in at {
+                        let at = FaceCoord::new(face, k, u, v);
+                        match (table.eval(at), table.position(at)) {
+                            (Ok(s), Ok(p)) => {
+                                assert_eq!(s.p.map(f64::to_bits), p.map(f64::to_bits), "{at:?}");
+                                checked += 1;
+                            }
+                            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                            (a, b) => panic!("{at:?}: {:?} vs {:?}", a.err(), b.err()),
+                        }
+                    }
+                }
+            }
+            for bad in [
+                FaceCoord::new(0, 7, 0.5, 0.5),
+                FaceCoord::new(0, 0, 1.5, 0.5),
+            ] {
+                let (a, b) = (table.eval(bad), table.position(bad));
+                assert_eq!(
+                    a.err().map(|e| e.to_string()),
+                    b.err().map(|e| e.to_string())
+                );
+            }
+        }
+        assert!(checked > 10_000, "{checked} points");
     }
 }
