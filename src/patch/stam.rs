@@ -762,9 +762,9 @@ mod tests {
     }
 
     /// The AVX product is the scalar one bit for bit: on the tabulated weights (levels 1 and
-    /// `MAX_DEPTH`) of every valence checked but 4 (regular: no Stam patch), and on random
-    /// weights and points of mixed signs and magnitudes, signed zeros and subnormals among them (the sums' order and roundings, and
-    /// the signs of zero sums, must all agree).
+    /// `MAX_DEPTH`) of every valence checked but 4 (regular: no Stam patch), and on random weights
+    /// and points of mixed signs and magnitudes, signed zeros and subnormals among them (the sums'
+    /// order and roundings, and the signs of zero sums, must all agree).
     #[test]
     fn grid_avx_is_grid_product() {
         if !std::arch::is_x86_feature_detected!("avx") {

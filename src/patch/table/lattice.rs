@@ -307,18 +307,16 @@ impl PatchTable {
         Ok(())
     }
 
-    /// [`Self::eval_d1_points`]'s positions alone (zero derivatives), the same bits, appended
-    /// to `out`, where the points lie in exact domains: where they all lie in one that is
-    /// one B-spline patch, its control points gathered once and no leaf looked up; elsewhere
-    /// each point's leaf looked up and, as in a domain's lattice
-    /// ([`Self::eval_domain_lattice_with`]), a B-spline, single-crease or Stam sub-patch
-    /// leaf's point summed without derivatives (the rows along its `s` kept for the next
-    /// point of the same leaf and `s`), other
-    /// points evaluated whole (their leaves' parts kept in `kept`); the points of a run may
-    /// lie in several domains (a side of an n-gon's sub-face runs on into the next
-    /// sub-face), each found in its own. `Ok(false)`, with nothing appended, where a point
-    /// is not in an exact domain or lies in a hole (point-by-point evaluation then names
-    /// it).
+    /// [`Self::eval_d1_points`]'s positions alone (zero derivatives), the same bits, appended to
+    /// `out`, where the points lie in exact domains: where they all lie in one that is one B-spline
+    /// patch, its control points gathered once and no leaf looked up; elsewhere each point's leaf
+    /// looked up and, as in a domain's lattice ([`Self::eval_domain_lattice_with`]), a B-spline,
+    /// single-crease or Stam sub-patch leaf's point summed without derivatives (the rows along its
+    /// `s` kept for the next point of the same leaf and `s`), other points evaluated whole (their
+    /// leaves' parts kept in `kept`); the points of a run may lie in several domains (a side of an
+    /// n-gon's sub-face runs on into the next sub-face), each found in its own. `Ok(false)`, with
+    /// nothing appended, where a point is not in an exact domain or lies in a hole (point-by-point
+    /// evaluation then names it).
     pub(crate) fn eval_points_p(
         &self,
         coords: &[FaceCoord],
