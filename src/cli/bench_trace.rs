@@ -122,6 +122,7 @@ pub fn trace_bench(args: &TraceBenchArgs) -> Result<serde_json::Value> {
                     max_rate: 1024,
                     displace: args.displace.clone(),
                 },
+                None,
                 !args.no_shading_normals,
             )?;
             Ok((table, bvh, [t0, t1, t2, std::time::Instant::now()]))

@@ -152,7 +152,21 @@ pub fn dice_each<C: Send>(
     plan: impl FnOnce(&DiceLayout) -> Result<Vec<C>>,
     visit: impl Fn(&mut C, &DomainView) -> Result<()> + Sync,
 ) -> Result<()> {
-    prepare(table, mesh, opts, true, normals, |p| {
+    dice_each_planned(table, mesh, opts, None, normals, plan, visit)
+}
+
+/// [`dice_each`] with the rates of `planned` where given ([`super::plan`] of the same
+/// table, mesh and options), instead of measuring the edges again.
+pub(crate) fn dice_each_planned<C: Send>(
+    table: &PatchTable,
+    mesh: &ControlMesh,
+    opts: &DiceOptions,
+    planned: Option<super::DicePlan>,
+    normals: bool,
+    plan: impl FnOnce(&DiceLayout) -> Result<Vec<C>>,
+    visit: impl Fn(&mut C, &DomainView) -> Result<()> + Sync,
+) -> Result<()> {
+    prepare(table, mesh, opts, planned, true, normals, |p| {
         let (_, triangles) = p.totals()?;
         let n = p.num_shared();
         let mut shared_positions = vec![[0.0; 3]; n];

@@ -26,6 +26,7 @@ mod rates;
 mod shared;
 
 pub use displace::Displacement;
+pub(crate) use each::dice_each_planned;
 pub use each::{dice_each, DiceLayout, DomainPlan, DomainView};
 pub use estimate::DiceEstimate;
 pub use pattern::{pattern, side_uv, GridPart, Pattern};
@@ -414,17 +415,55 @@ pub fn estimate_size(
     mesh: &ControlMesh,
     opts: &DiceOptions,
 ) -> Result<DiceEstimate> {
+    plan(table, mesh, opts).map(|p| p.estimate)
+}
+
+/// The edge rates of one dicing, found once: the size they imply, for a check of a whole
+/// scene's memory before anything is diced, and then the dicing itself
+/// ([`crate::grid::GridMesh::dice_planned`]), which would otherwise measure every edge again.
+#[derive(Clone, Debug)]
+pub struct DicePlan {
+    rates: Rates,
+    estimate: DiceEstimate,
+}
+
+impl DicePlan {
+    /// Upper bounds on the size of the diced mesh ([`estimate_size`]'s).
+    pub fn estimate(&self) -> DiceEstimate {
+        self.estimate
+    }
+
+    /// The rates, checked against the base level of the mesh they are used on: a plan made
+    /// for another mesh is an error, not a wrong dicing.
+    pub(crate) fn into_rates(self, level: &Level) -> Result<Rates> {
+        if self.rates.edge.len() != level.topo.num_edges()
+            || self.rates.spoke.len() != level.topo.face_verts.len()
+        {
+            return Err(Error::new(
+                ErrorKind::Usage,
+                "the dicing plan was made for another mesh",
+            ));
+        }
+        Ok(self.rates)
+    }
+}
+
+/// Plans the dicing of `mesh` (whose patch table is `table`) with `opts`: its edge rates and
+/// the size they imply. [`crate::grid::GridMesh::dice_planned`] dices by it with the same
+/// `table`, `mesh` and `opts`.
+pub fn plan(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicePlan> {
     let mut built = None;
     let level = table.base_level_of(mesh, &mut built)?;
     let displacer = DisplacedSurface::of(opts, table, mesh)?;
     let rates = rates::rates_for(table, level, opts, displacer.as_ref())?;
-    Ok(estimate::estimate(level, &rates))
+    let estimate = estimate::estimate(level, &rates);
+    Ok(DicePlan { rates, estimate })
 }
 
 /// Dices the limit surface of `mesh` (whose patch table is `table`) into triangles. The size
 /// is estimated first and checked against the memory budget ([`crate::memory`]).
 pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<DicedMesh> {
-    prepare(table, mesh, opts, false, true, |p| p.mesh())
+    prepare(table, mesh, opts, None, false, true, |p| p.mesh())
 }
 
 /// Everything dicing knows before it evaluates a point: the domains, their sizes, and what
@@ -442,8 +481,8 @@ struct Prepared<'a> {
 /// 316² grid 10 ms and 3,500 page faults, serially).
 const CHUNK: usize = 64;
 
-/// Prepares the dicing of `mesh` (rates, the shared points' layout, the domains' sizes) and
-/// hands it to `then`; with `lean`, domains write no per-point parameters, and of their grid
+/// Prepares the dicing of `mesh` (rates, unless `planned` gives them, the shared points'
+/// layout, the domains' sizes) and hands it to `then`; with `lean`, domains write no per-point parameters, and of their grid
 /// triangles neither corners nor records, only the levels, apart (see [`dice_each`]); without
 /// `normals` (lean only), the points' shading normals are not found where they need not be
 /// (every point of an undisplaced exact surface: [`LatticeScratch::finish`]), nor encoded.
@@ -451,6 +490,7 @@ fn prepare<R>(
     table: &PatchTable,
     mesh: &ControlMesh,
     opts: &DiceOptions,
+    planned: Option<DicePlan>,
     lean: bool,
     normals: bool,
     then: impl FnOnce(&Prepared) -> Result<R>,
@@ -468,7 +508,10 @@ fn prepare<R>(
     let topo = &level.topo;
     let live = |f: usize| !level.face_hole[f];
     let displacer = DisplacedSurface::of(opts, table, mesh)?;
-    let rates = rates::rates_for(table, level, opts, displacer.as_ref())?;
+    let rates = match planned {
+        Some(plan) => plan.into_rates(level)?,
+        None => rates::rates_for(table, level, opts, displacer.as_ref())?,
+    };
     crate::memory::check(
         "dicing",
         estimate::estimate(level, &rates).bytes(),
@@ -1326,7 +1369,7 @@ mod tests {
                     rate,
                     ..DiceOptions::default()
                 };
-                prepare(&table, mesh, &opts, false, true, |p| {
+                prepare(&table, mesh, &opts, None, false, true, |p| {
                     let mut sides = Sides::default();
                     for &(f, k) in &p.domains {
                         let (f, k) = (f as usize, k as usize);

@@ -519,7 +519,7 @@ fn build_limitray(
         let t0 = Instant::now();
         let table = embree_table(mesh)?;
         let t1 = Instant::now();
-        let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options, shading_normals)?;
+        let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options, None, shading_normals)?;
         let t3 = Instant::now();
         // The triangle BVH needs the full diced mesh (every triangle's record).
         let diced = dice(&table, mesh, &options)?;

@@ -10,7 +10,7 @@ use super::block::{plane_boxes, Block, BLOCK, LEVEL_UNIFORM};
 use super::node::Box4;
 use super::top::{self, Top};
 use super::{GridMesh, Loose, STRIP};
-use crate::dice::{dice_each, DiceOptions, DicedMesh, GridRegion};
+use crate::dice::{dice_each_planned, DiceOptions, DicePlan, DicedMesh, GridRegion};
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::ControlMesh;
 use crate::oct::oct_encode_all;
@@ -580,9 +580,21 @@ impl GridMesh {
     /// Dices the limit surface of `mesh` (whose patch table is `table`) under `opts` straight
     /// into a grid mesh: [`Self::build`] of [`crate::dice::dice`]'s mesh, the same bit for
     /// bit, but each domain's blocks and loose triangles are stored by the worker that dices
-    /// it, from its own buffers ([`dice_each`]), and the diced mesh is never made.
+    /// it, from its own buffers ([`crate::dice::dice_each`]), and the diced mesh is never made.
     pub fn dice(table: &PatchTable, mesh: &ControlMesh, opts: &DiceOptions) -> Result<GridMesh> {
-        Self::dice_staged(table, mesh, opts, true).map(|(m, _)| m)
+        Self::dice_staged(table, mesh, opts, None, true).map(|(m, _)| m)
+    }
+
+    /// [`Self::dice`] by the edge rates of `plan` ([`crate::dice::plan`] of the same `table`,
+    /// `mesh` and `opts`: the same mesh, bit for bit), without measuring the edges again. A
+    /// renderer plans every mesh first, to check the whole scene's memory, and then dices.
+    pub fn dice_planned(
+        table: &PatchTable,
+        mesh: &ControlMesh,
+        opts: &DiceOptions,
+        plan: DicePlan,
+    ) -> Result<GridMesh> {
+        Self::dice_staged(table, mesh, opts, Some(plan), true).map(|(m, _)| m)
     }
 
     /// [`Self::dice`] without shading normals ([`GridMesh::shading_normals`] false): the
@@ -600,7 +612,7 @@ impl GridMesh {
         mesh: &ControlMesh,
         opts: &DiceOptions,
     ) -> Result<GridMesh> {
-        Self::dice_staged(table, mesh, opts, false).map(|(m, _)| m)
+        Self::dice_staged(table, mesh, opts, None, false).map(|(m, _)| m)
     }
 
     /// [`Self::dice`] (with `normals`, else [`Self::dice_geometry`]), and when the blocks
@@ -610,6 +622,7 @@ impl GridMesh {
         table: &PatchTable,
         mesh: &ControlMesh,
         opts: &DiceOptions,
+        planned: Option<DicePlan>,
         normals: bool,
     ) -> Result<(GridMesh, std::time::Instant)> {
         let mut planning = Planning {
@@ -620,10 +633,11 @@ impl GridMesh {
         let mut triangles = 0;
         {
             let (planning, loose, triangles) = (&mut planning, &mut loose, &mut triangles);
-            dice_each(
+            dice_each_planned(
                 table,
                 mesh,
                 opts,
+                planned,
                 normals,
                 move |layout| {
                     *triangles = layout.triangles;

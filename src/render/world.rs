@@ -354,25 +354,27 @@ impl World {
         let first_user: Vec<usize> = (0..jobs.len())
             .map(|j| job_of.iter().position(|&x| x == j).unwrap_or(0))
             .collect();
-        let estimates = first_user
+        // Every distinct dicing planned (its edge rates measured, once), the whole scene's
+        // memory checked, and then each diced by its plan.
+        let plans = first_user
             .par_iter()
-            .map(|&i| {
-                crate::dice::estimate_size(&tables[table_of[i]], &controls[file_of[i]], &options[i])
-            })
+            .map(|&i| crate::dice::plan(&tables[table_of[i]], &controls[file_of[i]], &options[i]))
             .collect::<Result<Vec<_>>>()?;
         crate::memory::check(
             &format!(
                 "dicing and indexing the scene's {} distinct meshes",
                 jobs.len()
             ),
-            estimates.iter().map(|e| e.bytes_with_bvh()).sum(),
+            plans.iter().map(|p| p.estimate().bytes_with_bvh()).sum(),
             "lower the dicing rates (the meshes' rate, max_rate or pixels_per_edge)",
         )?;
-        let job_grids: Vec<Arc<GridMesh>> = first_user
-            .par_iter()
-            .map(|&i| {
+        let job_grids: Vec<Arc<GridMesh>> = plans
+            .into_par_iter()
+            .zip(first_user.par_iter())
+            .map(|(plan, &i)| {
                 let m = &desc.meshes[i];
-                GridMesh::dice(&tables[table_of[i]], &controls[file_of[i]], &options[i])
+                let (table, mesh) = (&tables[table_of[i]], &controls[file_of[i]]);
+                GridMesh::dice_planned(table, mesh, &options[i], plan)
                     .map(Arc::new)
                     .map_err(|e| e.in_file(m.file.display().to_string()))
             })

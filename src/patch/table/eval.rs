@@ -41,12 +41,12 @@ impl PatchTable {
 
     /// [`Self::eval`]'s position alone, the same bits. On an exact Loop surface it skips the
     /// secants that stand in for the derivatives at an irregular vertex (two descents 24
-    /// levels deep: [`crate::patch::LoopSurface::position`]); elsewhere it is the evaluation's
-    /// position.
+    /// levels deep: [`crate::patch::LoopSurface::position`]); elsewhere it is
+    /// [`Self::eval_d1`]'s position (no second derivatives).
     pub fn position(&self, at: FaceCoord) -> Result<[f64; 3]> {
         match (&self.approx, &self.loop_surface) {
             (None, Some(surface)) => surface.position_sub_quad(at),
-            _ => Ok(self.eval(at)?.p),
+            _ => Ok(self.eval_d1(at)?.p),
         }
     }
 
