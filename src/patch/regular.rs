@@ -142,6 +142,53 @@ fn diagonal(topo: &crate::mesh::Topology, f: usize, v: usize) -> Option<u32> {
     Some(gv[(corners[oi] as usize + 2) % 4])
 }
 
+/// Where corner `k`'s quadrant lies in the grid of control points (`4 y + x`): the corner
+/// `C[k]`, the points beside it across the edge out of it (`C[k] − V[k]`) and across the edge
+/// into it (`C[k] − U[k]`), and the diagonal point (`C[k] − U[k] − V[k]`).
+const QUADRANT: [[usize; 4]; 4] = {
+    let mut q = [[0; 4]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let (c, u, v) = (C[k], U[k], V[k]);
+        q[k] = [
+            (4 * c[1] + c[0]) as usize,
+            (4 * (c[1] - v[1]) + c[0] - v[0]) as usize,
+            (4 * (c[1] - u[1]) + c[0] - u[0]) as usize,
+            (4 * (c[1] - u[1] - v[1]) + c[0] - u[0] - v[0]) as usize,
+        ];
+        k += 1;
+    }
+    q
+};
+
+/// Whether vertex `v` of `level` is a corner [`interior_points`] takes: smooth, manifold and
+/// interior, of valence 4 among quads, with no sharp edge.
+pub fn regular_corner(level: &Level, v: usize) -> bool {
+    let topo = &level.topo;
+    let tag = topo.vert_tags[v];
+    if tag.nonmanifold || tag.boundary || level.vertex_sharpness[v] != 0.0 {
+        return false;
+    }
+    let (edges, faces) = (topo.vertex_edges(v), topo.vertex_faces(v));
+    edges.len() == 4
+        && faces.len() == 4
+        && !edges
+            .iter()
+            .any(|&e| crease::is_sharp(level.edge_sharpness[e as usize]))
+        && faces.iter().all(|&g| topo.face_size(g as usize) == 4)
+}
+
+/// [`regular_corner`] of every vertex of `level`, in parallel: each vertex tested once, not
+/// once per face around it.
+pub fn regular_corners(level: &Level) -> Vec<bool> {
+    use rayon::prelude::*;
+    (0..level.num_vertices())
+        .into_par_iter()
+        .with_min_len(crate::threads::min_len().max(4096))
+        .map(|v| regular_corner(level, v))
+        .collect()
+}
+
 /// The sixteen control points of face `f` of `level` when it is an interior B-spline patch
 /// whose every corner is a smooth valence-4 vertex of quads with nothing sharp around it,
 /// as vertex indices in grid order; `None` otherwise, whatever [`classify`] makes of the face.
@@ -149,42 +196,54 @@ fn diagonal(topo: &crate::mesh::Topology, f: usize, v: usize) -> Option<u32> {
 /// `BSpline { closed: 0 }`: the common case taken without [`Combo`]s (building and copying
 /// them took about 40% of the 316² grid's level-0 decisions: 32–34 → 19 ms at 1 thread).
 pub fn interior_points(level: &Level, f: usize) -> Option<[u32; 16]> {
+    interior_points_by(level, f, |v| regular_corner(level, v))
+}
+
+/// [`interior_points`] with its corners' test `regular(v)` ([`regular_corner`], or a level's
+/// [`regular_corners`] looked up).
+pub fn interior_points_by(
+    level: &Level,
+    f: usize,
+    regular: impl Fn(usize) -> bool,
+) -> Option<[u32; 16]> {
     let topo = &level.topo;
     let fv = topo.face_vertices(f);
-    if fv.len() != 4 {
+    if fv.len() != 4 || !fv.iter().all(|&v| regular(v as usize)) {
         return None;
     }
     let fe = topo.face_edge_list(f);
-    for &v in fv {
-        let v = v as usize;
-        let tag = topo.vert_tags[v];
-        if tag.nonmanifold || tag.boundary || level.vertex_sharpness[v] != 0.0 {
-            return None;
-        }
-        let (edges, faces) = (topo.vertex_edges(v), topo.vertex_faces(v));
-        if edges.len() != 4 || faces.len() != 4 {
-            return None;
-        }
-        if edges
-            .iter()
-            .any(|&e| crease::is_sharp(level.edge_sharpness[e as usize]))
-            || faces.iter().any(|&g| topo.face_size(g as usize) != 4)
-        {
-            return None;
-        }
-    }
+    // Each corner's quadrant from its ring, ordered from `f` across `f`'s edge into the
+    // corner (ring position `i + 1`), then the diagonal face (`i + 2`), then the face across
+    // `f`'s edge out of it (`i + 3`): those faces hold the points beside the corner across
+    // each edge, and the diagonal point. Their other corners are checked against `f`'s (a ring
+    // ordered otherwise is not taken: `classify` gives the same points).
     let mut grid = [0u32; 16];
     for k in 0..4 {
-        let k1 = (k + 1) % 4;
+        let (k1, k3) = ((k + 1) % 4, (k + 3) % 4);
         let e = fe[k];
         if topo.edge_face_count(e) != 2 || topo.edge_nonmanifold[e as usize] {
             return None;
         }
-        grid[at(C[k])] = fv[k];
-        let [x, y] = across(topo, f, fv, k)?;
-        grid[at(sub(C[k], V[k]))] = x;
-        grid[at(sub(C[k1], V[k]))] = y;
-        grid[at(sub(sub(C[k], U[k]), V[k]))] = diagonal(topo, f, fv[k] as usize)?;
+        let v = fv[k] as usize;
+        let (faces, corners) = (topo.vertex_faces(v), topo.vertex_face_corners(v));
+        let i = faces.iter().position(|&g| g as usize == f)?;
+        let quad = |j: usize| {
+            let g = (i + j) % 4;
+            (topo.face_vertices(faces[g] as usize), corners[g] as usize)
+        };
+        // Across the edge into the corner (from v_{k-1}): it runs v_k -> v_{k-1} there.
+        let (h, ch) = quad(1);
+        // Across the edge out of the corner (to v_{k+1}): it runs v_{k+1} -> v_k there.
+        let (g, cg) = quad(3);
+        let (d, cd) = quad(2);
+        if h[(ch + 1) % 4] != fv[k3] || g[(cg + 3) % 4] != fv[k1] {
+            return None;
+        }
+        let [corner, beside_out, beside_in, diagonal] = QUADRANT[k];
+        grid[corner] = fv[k];
+        grid[beside_out] = g[(cg + 1) % 4];
+        grid[beside_in] = h[(ch + 3) % 4];
+        grid[diagonal] = d[(cd + 2) % 4];
     }
     Some(grid)
 }
@@ -401,7 +460,8 @@ mod tests {
     use crate::refine::step;
 
     /// Wherever [`interior_points`] gives a face's points, [`classify`] gives the same points
-    /// (each a vertex alone) as an interior B-spline patch; and it gives them for every face of
+    /// (each a vertex alone) as an interior B-spline patch, and [`interior_points_by`] with a
+    /// level's [`regular_corners`] gives the same as it everywhere; and it gives them for every face of
     /// a grid whose corners are all interior: on level 0 and level 1 of meshes with boundaries,
     /// holes, n-gons (one among quads of valence-4 corners), extraordinary vertices,
     /// semi-sharp and infinitely sharp creases and a semi-sharp corner.
@@ -459,8 +519,11 @@ mod tests {
             let (base, _) = Level::base(mesh, &Options::default()).unwrap();
             let (child, _) = step::refine(&base, mesh.options.crease_method);
             for level in [&base, &child] {
+                let corners = regular_corners(level);
                 for f in 0..level.num_faces() {
-                    let Some(points) = interior_points(level, f) else {
+                    let by = interior_points_by(level, f, |v| corners[v]);
+                    assert_eq!(by, interior_points(level, f), "mesh {i} face {f}");
+                    let Some(points) = by else {
                         refused += 1;
                         continue;
                     };

@@ -11,7 +11,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, Options, Scheme};
 use crate::patch::approx::{Approximation, QuadApprox, TriApprox};
 use crate::patch::local::{child_face, extract_faces, extract_faces_within};
-use crate::patch::regular::{classify, interior_points, RegularKind};
+use crate::patch::regular::{classify, interior_points_by, regular_corners, RegularKind};
 use crate::patch::stam;
 use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
@@ -128,6 +128,8 @@ impl PatchTable {
         if depth == 0 {
             self.direct.reserve(16 * jobs.len());
         }
+        // Each vertex's test as a regular interior corner, once (not once per face at it).
+        let corners = regular_corners(level);
         for (c, chunk) in jobs.chunks(CHUNK).enumerate() {
             let parts: Vec<Decided> = chunk
                 .par_iter()
@@ -135,6 +137,7 @@ impl PatchTable {
                 .fold(Decided::default, |mut part, &(g, forced)| {
                     let found = decide(
                         level,
+                        &corners,
                         (g as usize, depth),
                         forced,
                         single_crease,
@@ -434,12 +437,14 @@ fn settle_part(
     refine
 }
 
-/// Decides face `g` of `level`, writing its control points' rows to `part`. A `forced` face
+/// Decides face `g` of `level` (whose vertices are regular corners where `corners` says so:
+/// [`regular_corners`]), writing its control points' rows to `part`. A `forced` face
 /// is refined whatever it is (a hierarchical edit acts below it); with `use_stam`, a quad
 /// with one smooth extraordinary corner is exact in constant time from its one-ring, with no
 /// need to isolate it to the maximum level.
 fn decide(
     level: &Level,
+    corners: &[bool],
     (g, depth): (usize, usize),
     forced: bool,
     single_crease: bool,
@@ -454,7 +459,7 @@ fn decide(
     }
     // The common case first, with no combinations built: a regular interior face, whose
     // control points are vertices as they are (what `classify` gives it, below).
-    if let Some(points) = interior_points(level, g) {
+    if let Some(points) = interior_points_by(level, g, |v| corners[v]) {
         let kind = RegularKind::BSpline { closed: 0 };
         if depth == 0 {
             part.direct.extend_from_slice(&points);
