@@ -11,7 +11,9 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::{ControlMesh, Options, Scheme};
 use crate::patch::approx::{Approximation, QuadApprox, TriApprox};
 use crate::patch::local::{child_face, extract_faces, extract_faces_within};
-use crate::patch::regular::{classify, interior_points_by, regular_corners, RegularKind};
+use crate::patch::regular::{
+    classify, interior_points_by, regular_corner, regular_corners, RegularKind,
+};
 use crate::patch::stam;
 use crate::patch::LoopSurface;
 use crate::refine::stencil::StencilTable;
@@ -128,8 +130,14 @@ impl PatchTable {
         if depth == 0 {
             self.direct.reserve(16 * jobs.len());
         }
-        // Each vertex's test as a regular interior corner, once (not once per face at it).
-        let corners = regular_corners(level);
+        // At level 0 (every face a job), each vertex's test as a regular interior corner once,
+        // not once per face at it; below it the jobs are a few faces of a cut-out's level,
+        // whose corners are tested where met.
+        let corners = if depth == 0 {
+            regular_corners(level)
+        } else {
+            Vec::new()
+        };
         for (c, chunk) in jobs.chunks(CHUNK).enumerate() {
             let parts: Vec<Decided> = chunk
                 .par_iter()
@@ -437,8 +445,8 @@ fn settle_part(
     refine
 }
 
-/// Decides face `g` of `level` (whose vertices are regular corners where `corners` says so:
-/// [`regular_corners`]), writing its control points' rows to `part`. A `forced` face
+/// Decides face `g` of `level` (whose vertices are regular corners where `corners` says so,
+/// [`regular_corners`], or where [`regular_corner`] finds them beyond its end), writing its control points' rows to `part`. A `forced` face
 /// is refined whatever it is (a hierarchical edit acts below it); with `use_stam`, a quad
 /// with one smooth extraordinary corner is exact in constant time from its one-ring, with no
 /// need to isolate it to the maximum level.
@@ -459,7 +467,11 @@ fn decide(
     }
     // The common case first, with no combinations built: a regular interior face, whose
     // control points are vertices as they are (what `classify` gives it, below).
-    if let Some(points) = interior_points_by(level, g, |v| corners[v]) {
+    let regular = |v: usize| match corners.get(v) {
+        Some(&r) => r,
+        None => regular_corner(level, v),
+    };
+    if let Some(points) = interior_points_by(level, g, regular) {
         let kind = RegularKind::BSpline { closed: 0 };
         if depth == 0 {
             part.direct.extend_from_slice(&points);
