@@ -482,10 +482,11 @@ struct Prepared<'a> {
 const CHUNK: usize = 64;
 
 /// Prepares the dicing of `mesh` (rates, unless `planned` gives them, the shared points'
-/// layout, the domains' sizes) and hands it to `then`; with `lean`, domains write no per-point parameters, and of their grid
-/// triangles neither corners nor records, only the levels, apart (see [`dice_each`]); without
-/// `normals` (lean only), the points' shading normals are not found where they need not be
-/// (every point of an undisplaced exact surface: [`LatticeScratch::finish`]), nor encoded.
+/// layout, the domains' sizes) and hands it to `then`; with `lean`, domains write no
+/// per-point parameters, and of their grid triangles neither corners nor records, only the
+/// levels, apart (see [`dice_each`]); without `normals` (lean only), the points' shading
+/// normals are not found where they need not be (every point of an undisplaced exact
+/// surface: [`LatticeScratch::finish`]), nor encoded.
 fn prepare<R>(
     table: &PatchTable,
     mesh: &ControlMesh,

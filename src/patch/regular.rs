@@ -226,6 +226,9 @@ pub fn interior_points_by(
         }
         let v = fv[k] as usize;
         let (faces, corners) = (topo.vertex_faces(v), topo.vertex_face_corners(v));
+        if faces.len() != 4 {
+            return None; // not a regular corner, whatever `regular` said
+        }
         let i = faces.iter().position(|&g| g as usize == f)?;
         let quad = |j: usize| {
             let g = (i + j) % 4;
@@ -236,7 +239,10 @@ pub fn interior_points_by(
         // Across the edge out of the corner (to v_{k+1}): it runs v_{k+1} -> v_k there.
         let (g, cg) = quad(3);
         let (d, cd) = quad(2);
-        if h[(ch + 1) % 4] != fv[k3] || g[(cg + 3) % 4] != fv[k1] {
+        if [h.len(), g.len(), d.len()] != [4; 3]
+            || h[(ch + 1) % 4] != fv[k3]
+            || g[(cg + 3) % 4] != fv[k1]
+        {
             return None;
         }
         let [corner, beside_out, beside_in, diagonal] = QUADRANT[k];
@@ -461,10 +467,10 @@ mod tests {
 
     /// Wherever [`interior_points`] gives a face's points, [`classify`] gives the same points
     /// (each a vertex alone) as an interior B-spline patch, and [`interior_points_by`] with a
-    /// level's [`regular_corners`] gives the same as it everywhere; and it gives them for every face of
-    /// a grid whose corners are all interior: on level 0 and level 1 of meshes with boundaries,
-    /// holes, n-gons (one among quads of valence-4 corners), extraordinary vertices,
-    /// semi-sharp and infinitely sharp creases and a semi-sharp corner.
+    /// level's [`regular_corners`] gives what it gives everywhere; and it gives them for every
+    /// face of a grid whose corners are all interior: on level 0 and level 1 of meshes with
+    /// boundaries, holes, n-gons (one among quads of valence-4 corners), extraordinary
+    /// vertices, semi-sharp and infinitely sharp creases and a semi-sharp corner.
     #[test]
     fn interior_points_are_classify_s() {
         let mut creased = generate::grid(8);

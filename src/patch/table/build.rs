@@ -446,10 +446,10 @@ fn settle_part(
 }
 
 /// Decides face `g` of `level` (whose vertices are regular corners where `corners` says so,
-/// [`regular_corners`], or where [`regular_corner`] finds them beyond its end), writing its control points' rows to `part`. A `forced` face
-/// is refined whatever it is (a hierarchical edit acts below it); with `use_stam`, a quad
-/// with one smooth extraordinary corner is exact in constant time from its one-ring, with no
-/// need to isolate it to the maximum level.
+/// [`regular_corners`], or where [`regular_corner`] finds them beyond its end), writing its
+/// control points' rows to `part`. A `forced` face is refined whatever it is (a hierarchical
+/// edit acts below it); with `use_stam`, a quad with one smooth extraordinary corner is exact
+/// in constant time from its one-ring, with no need to isolate it to the maximum level.
 fn decide(
     level: &Level,
     corners: &[bool],
