@@ -470,7 +470,9 @@ mod tests {
     /// level's [`regular_corners`] gives what it gives everywhere; and it gives them for every
     /// face of a grid whose corners are all interior: on level 0 and level 1 of meshes with
     /// boundaries, holes, n-gons (one among quads of valence-4 corners), extraordinary
-    /// vertices, semi-sharp and infinitely sharp creases and a semi-sharp corner.
+    /// vertices, semi-sharp and infinitely sharp creases and a semi-sharp corner. Given a
+    /// corners' test that takes every vertex, `interior_points_by` does not panic, and gives
+    /// nothing where a corner is not of valence 4.
     #[test]
     fn interior_points_are_classify_s() {
         let mut creased = generate::grid(8);
@@ -529,6 +531,15 @@ mod tests {
                 for f in 0..level.num_faces() {
                     let by = interior_points_by(level, f, |v| corners[v]);
                     assert_eq!(by, interior_points(level, f), "mesh {i} face {f}");
+                    // A corners' test that takes every vertex: no panic, and no points where
+                    // a corner is not of valence 4.
+                    let valence_4 = level
+                        .topo
+                        .face_vertices(f)
+                        .iter()
+                        .all(|&v| level.topo.vertex_faces(v as usize).len() == 4);
+                    let any = interior_points_by(level, f, |_| true);
+                    assert!(valence_4 || any.is_none(), "mesh {i} face {f}");
                     let Some(points) = by else {
                         refused += 1;
                         continue;
