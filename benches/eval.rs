@@ -4,6 +4,11 @@
 //! threads ([`limitray::harness::eval::eval_queries`], [`limitray::harness::eval::eval_batch`], the pieces of
 //! `limitray bench-eval`).
 //!
+//! `lattice_p`: one bicubic B-spline patch's interior lattice at rates 4, 16 and 64, positions
+//! alone ([`limitray::patch::bspline::eval_lattice_p`], what dicing a regular face without
+//! normals runs), and with first derivatives ([`limitray::patch::bspline::eval_lattice`], with
+//! normals), per lattice.
+//!
 //! Mesh: OpenSubdiv's `catmark_car.obj` from the shared models; without it the benchmark
 //! prints a note and measures nothing. Sample counts are small so that `cargo bench --bench
 //! eval` takes about a minute after building; `scripts/bench-eval.sh` runs it and prints the
@@ -26,6 +31,41 @@ const CAR: &str = concat!(
 
 /// Queries per iteration of the evaluation benchmark.
 const SAMPLES: usize = 10_000;
+
+/// The interior lattice of one patch (a fixed, non-planar control grid) at several rates.
+fn lattice(c: &mut Criterion) {
+    let cp: limitray::patch::bspline::ControlGrid = std::array::from_fn(|i| {
+        let (x, y) = ((i % 4) as f64, (i / 4) as f64);
+        [x, y, 0.25 * (x * y).sin() + 0.1 * x]
+    });
+    let mut group = c.benchmark_group("lattice_p");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    for rate in [4u32, 16, 64] {
+        group.throughput(Throughput::Elements(((rate - 1) * (rate - 1)) as u64));
+        group.bench_function(BenchmarkId::from_parameter(rate), |b| {
+            b.iter(|| {
+                let mut sum = 0.0;
+                limitray::patch::bspline::eval_lattice_p(black_box(&cp), rate, rate, |p| {
+                    sum += p[0] + p[1] + p[2]
+                });
+                black_box(sum)
+            })
+        });
+        group.bench_function(BenchmarkId::new("d1", rate), |b| {
+            b.iter(|| {
+                let mut sum = 0.0;
+                limitray::patch::bspline::eval_lattice(black_box(&cp), rate, rate, |p| {
+                    sum += p.p[0] + p.du[1] + p.dv[2]
+                });
+                black_box(sum)
+            })
+        });
+    }
+    group.finish();
+}
 
 fn eval(c: &mut Criterion) {
     let car = Path::new(CAR);
@@ -75,5 +115,5 @@ fn eval(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, eval);
+criterion_group!(benches, lattice, eval);
 criterion_main!(benches);

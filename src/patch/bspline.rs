@@ -243,19 +243,44 @@ pub fn eval_lattice(cp: &ControlGrid, nu: u32, nv: u32, mut out: impl FnMut(Poin
         return;
     }
     // Per interior column i: the four rows contracted along u, value and u-derivative.
-    let cols: Vec<(Rows, Rows)> = (1..nu)
-        .map(|i| {
-            let bu = Basis::at(i as f64 / nu as f64);
-            contract_u(cp, &bu.w, &bu.d1)
-        })
-        .collect();
-    for j in 1..nv {
-        let t = j as f64 / nv as f64;
-        let (w, d1) = (basis(t), basis_d1(t));
-        for rows in &cols {
-            out(finish_v(rows, &w, &d1));
+    let column = |i: usize| {
+        let bu = Basis::at((i + 1) as f64 / nu as f64);
+        contract_u(cp, &bu.w, &bu.d1)
+    };
+    with_columns(nu as usize - 1, column, |cols| {
+        for j in 1..nv {
+            let t = j as f64 / nv as f64;
+            let (w, d1) = (basis(t), basis_d1(t));
+            for rows in cols {
+                out(finish_v(rows, &w, &d1));
+            }
         }
+    })
+}
+
+/// Lattice columns a domain keeps on the stack (more go to the heap).
+const STACK_COLUMNS: usize = 64;
+
+/// Calls `f` with `[make(0), …, make(n - 1)]`, held on the stack when `n` ≤
+/// [`STACK_COLUMNS`] (and not initialised beyond them: zeroing or allocating the buffer cost
+/// more than the few columns a low rate has — at rate 4, zeroing was a fifth of a lattice's
+/// positions), else in a vector.
+#[inline(always)]
+fn with_columns<T: Copy, R>(
+    n: usize,
+    mut make: impl FnMut(usize) -> T,
+    f: impl FnOnce(&[T]) -> R,
+) -> R {
+    if n > STACK_COLUMNS {
+        return f(&(0..n).map(make).collect::<Vec<T>>());
     }
+    let mut buf = [const { std::mem::MaybeUninit::<T>::uninit() }; STACK_COLUMNS];
+    for (i, c) in buf[..n].iter_mut().enumerate() {
+        c.write(make(i));
+    }
+    // SAFETY: the first `n` entries were written just above, and `MaybeUninit<T>` has `T`'s
+    // layout (`T: Copy`: nothing to drop).
+    f(unsafe { std::slice::from_raw_parts(buf.as_ptr().cast::<T>(), n) })
 }
 
 /// [`contract_u`]'s value rows alone, the same bits.
@@ -287,21 +312,15 @@ pub fn eval_lattice_p(cp: &ControlGrid, nu: u32, nv: u32, mut out: impl FnMut([f
     if nu < 2 || nv < 2 {
         return;
     }
-    let mut cols = [[[0.0; 3]; 4]; 64];
-    let cols: &mut [Rows] = if nu as usize - 1 <= cols.len() {
-        &mut cols[..nu as usize - 1]
-    } else {
-        return eval_lattice(cp, nu, nv, |pt| out(pt.p));
-    };
-    for (i, c) in cols.iter_mut().enumerate() {
-        *c = contract_u_p(cp, &basis((i + 1) as f64 / nu as f64));
-    }
-    for j in 1..nv {
-        let w = basis(j as f64 / nv as f64);
-        for rows in cols.iter() {
-            out(finish_v_p(rows, &w));
+    let column = |i: usize| contract_u_p(cp, &basis((i + 1) as f64 / nu as f64));
+    with_columns(nu as usize - 1, column, |cols| {
+        for j in 1..nv {
+            let w = basis(j as f64 / nv as f64);
+            for rows in cols {
+                out(finish_v_p(rows, &w));
+            }
         }
-    }
+    })
 }
 
 /// [`eval_d1`]'s position alone, the same bits.

@@ -722,11 +722,13 @@ pub(super) mod tests {
                 FaceCoord::new(0, 7, 0.5, 0.5),
                 FaceCoord::new(0, 0, 1.5, 0.5),
             ] {
+                // Both refuse the coordinate, with the same message (two `Ok`s would compare
+                // equal as `None`s: each must be an error).
                 let (a, b) = (table.eval(bad), table.position(bad));
-                assert_eq!(
-                    a.err().map(|e| e.to_string()),
-                    b.err().map(|e| e.to_string())
-                );
+                match (a, b) {
+                    (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{bad:?}"),
+                    (a, b) => panic!("{bad:?} must be refused: {:?} vs {:?}", a.ok(), b.ok()),
+                }
             }
         }
         assert!(checked > 10_000, "{checked} points");
