@@ -120,15 +120,17 @@ impl Block {
         ]
     }
 
-    /// [`Self::uv`] of three vertices, bit for bit, one `(u, v)` division each (SSE2).
+    /// [`Self::uv`] of quad `(x, y)`'s corners `(x, y)`, `(x + 1, y)`, `(x + 1, y + 1)` and
+    /// `(x, y + 1)`, bit for bit: the two `(u, v)` divisions (SSE2) of its diagonal corners,
+    /// whose coordinates the others share.
     #[inline]
-    pub fn uvs(&self, at: [(usize, usize); 3]) -> [[f32; 2]; 3] {
+    pub fn quad_uvs(&self, x: usize, y: usize) -> [[f32; 2]; 4] {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: SSE2 is part of the x86_64 baseline.
-        unsafe {
+        let [[u0, v0], [u1, v1]] = unsafe {
             use std::arch::x86_64::{_mm_div_pd, _mm_set_pd, _mm_storeu_pd};
             let n = _mm_set_pd(self.n[1] as f64, self.n[0] as f64);
-            at.map(|(x, y)| {
+            [(x, y), (x + 1, y + 1)].map(|(x, y)| {
                 let ij = _mm_set_pd(
                     (self.ij[1] as usize + y) as f64,
                     (self.ij[0] as usize + x) as f64,
@@ -137,9 +139,10 @@ impl Block {
                 _mm_storeu_pd(q.as_mut_ptr(), _mm_div_pd(ij, n));
                 q.map(|c| c as f32)
             })
-        }
+        };
         #[cfg(not(target_arch = "x86_64"))]
-        at.map(|(x, y)| self.uv(x, y))
+        let [[u0, v0], [u1, v1]] = [self.uv(x, y), self.uv(x + 1, y + 1)];
+        [[u0, v0], [u1, v0], [u1, v1], [u0, v1]]
     }
 }
 
@@ -234,10 +237,10 @@ pub fn plane_boxes(b: &Block, coords: &[f32], quadrants: &mut [Box4]) -> Box4 {
 mod tests {
     use super::*;
 
-    /// [`Block::uvs`] gives [`Block::uv`]'s bits: random grid sizes (1 to 2^20 points a side)
-    /// and positions in them.
+    /// [`Block::quad_uvs`] gives [`Block::uv`]'s bits at the quad's corners: random grid
+    /// sizes (1 to 2^20 points a side) and positions in them.
     #[test]
-    fn uvs_are_uv_bit_for_bit() {
+    fn quad_uvs_are_uv_bit_for_bit() {
         let mut rng = crate::harness::rng::SplitMix64(116);
         for _ in 0..100_000 {
             let mut r = |n: u64| (rng.next_u64() % n) as u32;
@@ -247,8 +250,9 @@ mod tests {
                 ij: [r(n[0] as u64), r(n[1] as u64)],
                 ..Block::default()
             };
-            let at: [(usize, usize); 3] = std::array::from_fn(|_| (r(9) as usize, r(9) as usize));
-            let got = b.uvs(at);
+            let (x, y) = (r(8) as usize, r(8) as usize);
+            let got = b.quad_uvs(x, y);
+            let at = [(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)];
             for (k, &(x, y)) in at.iter().enumerate() {
                 assert_eq!(got[k].map(f32::to_bits), b.uv(x, y).map(f32::to_bits));
             }

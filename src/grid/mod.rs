@@ -466,10 +466,10 @@ impl GridMesh {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
                 let (x, y, h) = (x as usize, y as usize, h as usize);
-                let uv = b.uvs(grid_corners(x, y, h));
+                let uv = triangle_of(b.quad_uvs(x, y), h);
                 let level = b.triangle_level(&self.levels, x, y, h);
                 let id = b.triangle(x, y, h);
-                (self.corners(leaf), uv, id, b.face, b.k, level)
+                (self.grid_corners_of(b, x, y, h), uv, id, b.face, b.k, level)
             }
             Found::Loose(li) => {
                 let l = &self.loose[li as usize];
@@ -486,13 +486,21 @@ impl GridMesh {
         match Found::of(leaf) {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
-                let w = b.cols as usize + 1;
-                let c = &self.coords[b.vert as usize..];
-                grid_corners(x as usize, y as usize, h as usize)
-                    .map(|(cx, cy)| std::array::from_fn(|a| c[(3 * cy + a) * w + cx]))
+                self.grid_corners_of(b, x as usize, y as usize, h as usize)
             }
             Found::Loose(li) => self.loose[li as usize].p,
         }
+    }
+
+    /// The corners of half `h` of quad `(x, y)` of block `b` ([`grid_corners`]' vertices),
+    /// read from the block's planes: one row of a plane per corner row.
+    #[inline]
+    fn grid_corners_of(&self, b: &Block, x: usize, y: usize, h: usize) -> [[f32; 3]; 3] {
+        let w = b.cols as usize + 1;
+        let row = |y: usize| &self.coords[b.vert as usize + 3 * y * w..][..3 * w];
+        let (r0, r1) = (row(y), row(y + 1));
+        let at = |r: &[f32], x: usize| [r[x], r[w + x], r[2 * w + x]];
+        triangle_of([at(r0, x), at(r0, x + 1), at(r1, x + 1), at(r1, x)], h)
     }
 
     /// The corners of every triangle, by id (the diced mesh's order: quad `(x, y)` of a grid
@@ -520,7 +528,7 @@ impl GridMesh {
         match Found::of(leaf) {
             Found::Grid(bi, x, y, h) => {
                 let b = &self.blocks[bi as usize];
-                b.uvs(grid_corners(x as usize, y as usize, h as usize))
+                triangle_of(b.quad_uvs(x as usize, y as usize), h as usize)
             }
             Found::Loose(li) => self.loose[li as usize].uv,
         }
@@ -540,6 +548,17 @@ impl GridMesh {
             }
             Found::Loose(li) => oct_decode3(self.loose[li as usize].n),
         }
+    }
+}
+
+/// Half `h` of the quad whose corners are `[a, b, c, d]` (counter-clockwise from its
+/// lower-left `a`): `[a, b, c]` or `[a, c, d]`, as [`grid_corners`].
+#[inline(always)]
+fn triangle_of<T: Copy>([a, b, c, d]: [T; 4], h: usize) -> [T; 3] {
+    if h == 0 {
+        [a, b, c]
+    } else {
+        [a, c, d]
     }
 }
 
