@@ -359,9 +359,11 @@ impl PatchTable {
         if patch.direct {
             // `+ 0.0` as a stencil row of one unit term sums (`0 + 1·x`): the same bits,
             // the sign of a zero included.
-            std::borrow::Cow::Owned(std::array::from_fn(|i| {
-                self.verts[self.direct[first + i] as usize].map(|x| x + 0.0)
-            }))
+            // One bounds check for the 16 indices, then one a vertex.
+            let at: &[u32; 16] = self.direct[first..first + 16]
+                .try_into()
+                .expect("a direct patch has 16 vertices");
+            std::borrow::Cow::Owned(at.map(|v| self.verts[v as usize].map(|x| x + 0.0)))
         } else {
             std::borrow::Cow::Borrowed(
                 self.points[first..first + 16]
