@@ -552,7 +552,8 @@ impl GridMesh {
 }
 
 /// Half `h` of the quad whose corners are `[a, b, c, d]` (counter-clockwise from its
-/// lower-left `a`): `[a, b, c]` or `[a, c, d]`, as [`grid_corners`].
+/// lower-left `a`): `[a, b, c]` or `[a, c, d]`, the diced mesh's order. The one place that
+/// order is written: corners, parameters and normals all take it from here.
 #[inline(always)]
 fn triangle_of<T: Copy>([a, b, c, d]: [T; 4], h: usize) -> [T; 3] {
     if h == 0 {
@@ -562,13 +563,10 @@ fn triangle_of<T: Copy>([a, b, c, d]: [T; 4], h: usize) -> [T; 3] {
     }
 }
 
-/// The grid vertices `(x, y)` of half `h` of quad `(x, y)`: `[a, b, c]` or `[a, c, d]`.
+/// The grid vertices `(x, y)` of half `h` of quad `(x, y)`: `[a, b, c]` or `[a, c, d]`
+/// ([`triangle_of`] the quad's corners).
 fn grid_corners(x: usize, y: usize, h: usize) -> [(usize, usize); 3] {
-    if h == 0 {
-        [(x, y), (x + 1, y), (x + 1, y + 1)]
-    } else {
-        [(x, y), (x + 1, y + 1), (x, y + 1)]
-    }
+    triangle_of([(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)], h)
 }
 
 impl crate::bvh::Intersect for GridMesh {
