@@ -35,6 +35,29 @@ const DEEP: usize = 48;
 /// Clusters of at least this many items may build their halves in parallel.
 const PARALLEL: usize = 4096;
 
+/// A lane-by-lane operation on two [`F4`]s: one SSE instruction (`$sse`) on x86_64, exactly the
+/// scalar `$scalar` on each lane elsewhere (IEEE operations: the same bits).
+macro_rules! lanes {
+    ($a:expr, $b:expr, $sse:ident, $scalar:expr) => {{
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE is part of x86_64; `F4` is 16 bytes, aligned to 16.
+        unsafe {
+            use std::arch::x86_64::{_mm_load_ps, _mm_store_ps, $sse};
+            let mut out = F4([0.0; 4]);
+            _mm_store_ps(
+                out.0.as_mut_ptr(),
+                $sse(_mm_load_ps($a.0.as_ptr()), _mm_load_ps($b.0.as_ptr())),
+            );
+            out
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let f = $scalar;
+            F4(std::array::from_fn(|i| f($a.0[i], $b.0[i])))
+        }
+    }};
+}
+
 /// Four `f32` lanes: `x`, `y`, `z` and one unused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(16))]
@@ -47,64 +70,55 @@ impl F4 {
     /// Lane by lane `a < b ? a : b` (`minps` exactly; never given a NaN here).
     #[inline(always)]
     fn min(self, b: F4) -> F4 {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: SSE is part of x86_64; `F4` is 16 bytes, aligned to 16.
-        unsafe {
-            use std::arch::x86_64::{_mm_load_ps, _mm_min_ps, _mm_store_ps};
-            let mut out = F4([0.0; 4]);
-            _mm_store_ps(
-                out.0.as_mut_ptr(),
-                _mm_min_ps(_mm_load_ps(self.0.as_ptr()), _mm_load_ps(b.0.as_ptr())),
-            );
-            out
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        F4(std::array::from_fn(|i| {
-            if self.0[i] < b.0[i] {
-                self.0[i]
-            } else {
-                b.0[i]
-            }
-        }))
+        lanes!(self, b, _mm_min_ps, |x: f32, y: f32| if x < y {
+            x
+        } else {
+            y
+        })
     }
 
     /// Lane by lane `a > b ? a : b` (`maxps` exactly).
     #[inline(always)]
     fn max(self, b: F4) -> F4 {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as in `min`.
-        unsafe {
-            use std::arch::x86_64::{_mm_load_ps, _mm_max_ps, _mm_store_ps};
-            let mut out = F4([0.0; 4]);
-            _mm_store_ps(
-                out.0.as_mut_ptr(),
-                _mm_max_ps(_mm_load_ps(self.0.as_ptr()), _mm_load_ps(b.0.as_ptr())),
-            );
-            out
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        F4(std::array::from_fn(|i| {
-            if self.0[i] > b.0[i] {
-                self.0[i]
-            } else {
-                b.0[i]
-            }
-        }))
+        lanes!(self, b, _mm_max_ps, |x: f32, y: f32| if x > y {
+            x
+        } else {
+            y
+        })
     }
 
     #[inline(always)]
     fn add(self, b: F4) -> F4 {
-        F4(std::array::from_fn(|i| self.0[i] + b.0[i]))
+        lanes!(self, b, _mm_add_ps, |x: f32, y: f32| x + y)
     }
 
     #[inline(always)]
     fn sub(self, b: F4) -> F4 {
-        F4(std::array::from_fn(|i| self.0[i] - b.0[i]))
+        lanes!(self, b, _mm_sub_ps, |x: f32, y: f32| x - y)
     }
 
     #[inline(always)]
     fn mul(self, b: F4) -> F4 {
-        F4(std::array::from_fn(|i| self.0[i] * b.0[i]))
+        lanes!(self, b, _mm_mul_ps, |x: f32, y: f32| x * y)
+    }
+
+    /// The lanes truncated towards zero (`cvttps2dq`; every lane in `i32`'s range).
+    #[inline(always)]
+    fn trunc(self) -> [i32; 4] {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of x86_64; `F4` is 16 bytes, aligned to 16.
+        unsafe {
+            use std::arch::x86_64::{_mm_cvttps_epi32, _mm_load_ps, _mm_storeu_si128};
+            let mut out = [0i32; 4];
+            _mm_storeu_si128(
+                out.as_mut_ptr().cast(),
+                _mm_cvttps_epi32(_mm_load_ps(self.0.as_ptr())),
+            );
+            out
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        // SAFETY: the caller's lanes are in range (see above).
+        std::array::from_fn(|k| unsafe { self.0[k].to_int_unchecked::<i32>() })
     }
 
     fn xyz(self) -> [f32; 3] {
@@ -125,8 +139,16 @@ impl Item {
     /// The box's lower corner, fourth lane zero.
     #[inline(always)]
     fn lo(&self) -> F4 {
-        let l = self.lo_id.0;
-        F4([l[0], l[1], l[2], 0.0])
+        // All ones in the first three lanes: the fourth (the id's bits) becomes +0.
+        const KEEP: F4 = F4([
+            f32::from_bits(u32::MAX),
+            f32::from_bits(u32::MAX),
+            f32::from_bits(u32::MAX),
+            0.0,
+        ]);
+        lanes!(self.lo_id, KEEP, _mm_and_ps, |x: f32, k: f32| {
+            f32::from_bits(x.to_bits() & k.to_bits())
+        })
     }
 
     fn id(&self) -> u32 {
@@ -259,9 +281,8 @@ impl Binning {
             .mul(self.scale)
             .max(F4([0.0; 4]))
             .min(self.last);
-        // SAFETY: each lane is in 0..=last (a NaN gave way to 0 in `max`), so truncation
-        // is in range.
-        let i: [i32; 4] = std::array::from_fn(|k| unsafe { x.0[k].to_int_unchecked::<i32>() });
+        // Each lane is in 0..=last (a NaN gave way to 0 in `max`): truncation is in range.
+        let i = x.trunc();
         [i[0] as usize, i[1] as usize, i[2] as usize]
     }
 }
