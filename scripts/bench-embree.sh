@@ -7,7 +7,10 @@
 # REPS=3 on 2 cores. The engines together take ~500 bytes per triangle: about 6.5 GB for the car
 # at rate 64 (12.9 M triangles); the 316 grid at rate 16 (51 M triangles, about 25 GB) does not
 # fit a 23 GB machine, so use 79:16 for 3.2 M triangles at rate 16.
-# Prints a markdown table on stdout; the JSON lines of `limitray bench` go to stderr.
+# Prints a markdown table on stdout, then a second one of limitray ÷ Embree ratios paired by
+# round (`limitray bench` interleaves the engines round by round: each round's ratio compares
+# measurements taken seconds apart; their median, and their range); the JSON lines of
+# `limitray bench` go to stderr.
 #
 # Usage: bash scripts/setup-embree.sh && bash scripts/bench-embree.sh > table.md 2> raw.jsonl
 # Environment: RAYS (default 1000000), REPS (3), THREADS ("1 2"),
@@ -25,6 +28,8 @@ CAR="$ROOT/../shared/models/opensubdiv/catmark_car.obj"
 bash scripts/setup-embree.sh
 cargo build --release --features embree --quiet
 BIN="$ROOT/target/release/limitray"
+PAIRED="$(mktemp)"
+trap 'rm -f "$PAIRED"' EXIT
 
 echo "| mesh | rate | threads | triangles | engine | build ms | coherent Mrays/s | incoherent Mrays/s | any-hit Mrays/s | bytes/triangle | build ×limitray | coherent ×limitray | incoherent ×limitray | any-hit ×limitray | leaks in place | leaks far |"
 echo "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
@@ -41,10 +46,25 @@ for config in $CONFIGS; do
         fi
         json="$("$BIN" bench "${args[@]}" --rate "$rate" --rays "$RAYS" --threads "$t" --reps "$REPS" --json "${FLAGS[@]}")"
         echo "$json" >&2
-        python3 - "$mesh" "$json" <<'PY'
-import json, sys
+        python3 - "$mesh" "$json" "$PAIRED" <<'PY'
+import json, statistics, sys
 mesh = sys.argv[1]
 rows = [json.loads(l) for l in sys.argv[2].splitlines() if l.strip()]
+by = {e["engine"]: e for e in rows}
+# Paired ratios: limitray's repetition r against the Embree engine's repetition r (the same
+# round), for build time (limitray ÷ Embree: lower is faster) and rays (limitray ÷ Embree).
+def paired(peer, key):
+    a, b = by["limitray"]["samples"][key], by[peer]["samples"][key]
+    r = [x / y for x, y in zip(a, b)]
+    return "%.2f (%.2f–%.2f)" % (statistics.median(r), min(r), max(r))
+e = rows[0]
+name = {"car": "catmark_car", "blob": "blob.obj"}.get(mesh) or "grid %s" % mesh
+with open(sys.argv[3], "a") as f:
+    f.write("| %s r%d | %d | %s | %s | %s | %s | %s |\n" % (
+        name, e["rate"], e["threads"],
+        paired("embree-subdiv", "build_ms"), paired("embree-subdiv", "incoherent_mrays_s"),
+        paired("embree-subdiv", "coherent_mrays_s"), paired("embree-subdiv", "anyhit_mrays_s"),
+        paired("embree-triangles", "incoherent_mrays_s")))
 base = rows[0]
 for e in rows:
     name = {"car": "catmark_car", "blob": "blob.obj"}.get(mesh) or "grid %s (%d faces)" % (mesh, e["faces"])
@@ -59,3 +79,9 @@ for e in rows:
 PY
     done
 done
+echo
+echo "Limitray ÷ Embree, paired by round: median of the rounds' ratios (lowest–highest)."
+echo
+echo "| mesh | threads | build ÷ subdiv | incoherent ÷ subdiv | coherent ÷ subdiv | any-hit ÷ subdiv | incoherent ÷ triangles |"
+echo "|---|---:|---:|---:|---:|---:|---:|"
+cat "$PAIRED"

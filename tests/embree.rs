@@ -598,7 +598,7 @@ fn cli_crosscheck_and_bench() {
             "--rays",
             "20000",
             "--reps",
-            "1",
+            "3",
             "--threads",
             "2",
             "--leak-rays",
@@ -632,6 +632,28 @@ fn cli_crosscheck_and_bench() {
             assert!(r[key].as_f64().is_some_and(|x| x >= 0.0), "{key}: {r}");
         }
         assert!(r.get("bytes_per_triangle").is_some(), "{r}");
+        // Every repetition is kept (three rounds here), and each figure is their median.
+        for (key, figure) in [
+            ("build_ms", "build_ms"),
+            ("coherent_mrays_s", "coherent_mrays_s"),
+            ("incoherent_mrays_s", "incoherent_mrays_s"),
+            ("anyhit_mrays_s", "anyhit_mrays_s"),
+        ] {
+            let mut v: Vec<f64> = r["samples"][key]
+                .as_array()
+                .unwrap_or_else(|| panic!("samples.{key}: {r}"))
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            assert_eq!(v.len(), 3, "samples.{key}: {r}");
+            assert!(v.iter().all(|x| x.is_finite() && *x > 0.0), "{r}");
+            v.sort_by(f64::total_cmp);
+            assert_eq!(
+                r[figure].as_f64(),
+                Some(v[1]),
+                "{figure} is the median: {r}"
+            );
+        }
         // limitray's grid core stores shading normals unless `--no-shading-normals`.
         assert_eq!(r["shading_normals"], true, "{r}");
     }

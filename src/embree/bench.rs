@@ -4,9 +4,13 @@
 //!
 //! Every engine is timed inside one rayon pool of `threads` threads (Embree's build threads
 //! limited to the same number through its device configuration); timings are medians of
-//! `reps` repetitions. Leak counts use [`rays::towards_points`]: rays from just behind the
-//! surface through diced vertices and points on diced edges, away from the mesh boundary, so
-//! every one of them must hit; each miss is a leak. They are counted with the mesh where it is
+//! `reps` repetitions, taken in rounds: each round builds every engine once, then traces each
+//! set of rays with every engine in turn, with a pause after each build for its threads to go
+//! idle. A slow stretch of a shared machine then falls on all engines of a round alike, and
+//! [`EngineResult::samples`] keeps every repetition for ratios of the same round. Leak counts
+//! use [`rays::towards_points`]: rays from just behind the surface through diced vertices and
+//! points on diced edges, away from the mesh boundary, so every one of them must hit; each
+//! miss is a leak. They are counted with the mesh where it is
 //! and translated to [`FAR_OFFSET`] (large coordinates stress float precision).
 
 use super::crosscheck::embree_table;
@@ -101,6 +105,25 @@ pub struct EngineResult {
     pub leaks: usize,
     /// Leaks of the leak rays, mesh translated to [`FAR_OFFSET`].
     pub leaks_far: usize,
+    /// Every repetition's measurement, in the order they were taken (the figures above are
+    /// their medians): build seconds, and coherent, incoherent and any-hit rays per second.
+    /// Repetition `r` of every engine was taken in the same round `r` of the interleaved
+    /// schedule ([`bench()`]), so ratios of the same repetition pair measurements taken
+    /// seconds apart.
+    pub samples: Samples,
+}
+
+/// Per-repetition measurements of one engine ([`EngineResult::samples`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Samples {
+    /// Build seconds.
+    pub build_s: Vec<f64>,
+    /// Coherent rays per second.
+    pub coherent: Vec<f64>,
+    /// Incoherent rays per second.
+    pub incoherent: Vec<f64>,
+    /// Any-hit queries per second.
+    pub anyhit: Vec<f64>,
 }
 
 /// Everything [`bench()`] measures.
@@ -158,6 +181,12 @@ impl BenchReport {
                     "displace": self.options.displace.map(|(a, f)| [a, f]),
                     "shading_normals": self.options.shading_normals,
                     "camera": [self.camera.0, self.camera.1],
+                    "samples": {
+                        "build_ms": scaled(&e.samples.build_s, 1e3),
+                        "coherent_mrays_s": scaled(&e.samples.coherent, 1e-6),
+                        "incoherent_mrays_s": scaled(&e.samples.incoherent, 1e-6),
+                        "anyhit_mrays_s": scaled(&e.samples.anyhit, 1e-6),
+                    },
                     "far_offset": FAR_OFFSET,
                     "embree_version": self.embree_version,
                 })
@@ -225,6 +254,11 @@ impl BenchReport {
         ));
         s
     }
+}
+
+/// `v`'s values times `k` (seconds to milliseconds, rays per second to millions).
+fn scaled(v: &[f64], k: f64) -> Vec<f64> {
+    v.iter().map(|x| x * k).collect()
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -426,10 +460,10 @@ impl Engine for ExactTracer {
     }
 }
 
-/// The reference intersector of `mesh`, built `reps` times: the last one, and the median
-/// seconds of its patch table and of its pieces and hierarchy.
-fn build_exact(mesh: &ControlMesh, reps: usize) -> Result<(ExactTracer, f64, f64)> {
-    let mut times = (Vec::new(), Vec::new());
+/// The reference intersector of `mesh`, built `reps` times: the last one, and the seconds of
+/// its patch table and of its pieces and hierarchy, per repetition.
+fn build_exact(mesh: &ControlMesh, reps: usize) -> Result<(ExactTracer, [Vec<f64>; 2])> {
+    let mut times: [Vec<f64>; 2] = Default::default();
     let mut last = None;
     for _ in 0..reps.max(1) {
         drop(last.take());
@@ -438,12 +472,12 @@ fn build_exact(mesh: &ControlMesh, reps: usize) -> Result<(ExactTracer, f64, f64
         let t1 = Instant::now();
         let tracer = ExactTracer::new(table, mesh)?;
         let t2 = Instant::now();
-        times.0.push((t1 - t0).as_secs_f64());
-        times.1.push((t2 - t1).as_secs_f64());
+        times[0].push((t1 - t0).as_secs_f64());
+        times[1].push((t2 - t1).as_secs_f64());
         last = Some(tracer);
     }
     let tracer = last.expect("at least one repetition");
-    Ok((tracer, median(times.0), median(times.1)))
+    Ok((tracer, times))
 }
 
 impl Engine for Scene {
@@ -472,39 +506,25 @@ fn trace(engine: &dyn Engine, rays: &[TestRay], any: bool) -> (f64, usize) {
     (t0.elapsed().as_secs_f64(), hits)
 }
 
-fn throughput(engine: &dyn Engine, rays: &[TestRay], reps: usize, any: bool) -> (f64, usize) {
-    let mut times = Vec::new();
-    let mut hits = 0;
-    for _ in 0..reps {
-        let (t, h) = trace(engine, rays, any);
-        times.push(t);
-        hits = h;
-    }
-    (rays.len() as f64 / median(times), hits)
-}
-
 fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
     rays.len() - trace(engine, rays, false).1
 }
 
-/// limitray's two diced structures, and the seconds of each build part per repetition:
-/// patch table, dicing into the grid core's blocks, the grid core's strips and top level (the
-/// grid core's build, [`GridMesh::dice`]), full dicing, triangle BVH (the triangle BVH's).
+/// limitray's two diced structures.
 struct Limitray {
     grid: GridMesh,
     tris: MeshBvh,
-    parts: [Vec<f64>; 5],
 }
 
+/// Builds [`Limitray`] once, with the seconds of each part: patch table, dicing into the grid
+/// core's blocks, the grid core's strips and top level (the grid core's build,
+/// [`GridMesh::dice`]), full dicing, triangle BVH (the triangle BVH's).
 fn build_limitray(
     mesh: &ControlMesh,
     rate: u32,
-    reps: usize,
     displace: Option<(f64, f64)>,
     shading_normals: bool,
-) -> Result<Limitray> {
-    let mut parts: [Vec<f64>; 5] = Default::default();
-    let mut last: Option<(GridMesh, MeshBvh)> = None;
+) -> Result<(Limitray, [f64; 5])> {
     let options = DiceOptions {
         rate: DiceRate::Uniform(rate),
         displace: displace.map(|(amplitude, frequency)| Displacement::Noise {
@@ -513,94 +533,82 @@ fn build_limitray(
         }),
         ..DiceOptions::default()
     };
-    for _ in 0..reps.max(1) {
-        // Free the previous repetition first: peak memory stays at one copy.
-        drop(last.take());
-        let t0 = Instant::now();
-        let table = embree_table(mesh)?;
-        let t1 = Instant::now();
-        let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options, None, shading_normals)?;
-        let t3 = Instant::now();
-        // The triangle BVH needs the full diced mesh (every triangle's record).
-        let diced = dice(&table, mesh, &options)?;
-        drop(table);
-        let t4 = Instant::now();
-        let tris = MeshBvh::build(diced);
-        let t5 = Instant::now();
-        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
-            .into_iter()
-            .enumerate()
-        {
-            parts[i].push((b - a).as_secs_f64());
-        }
-        last = Some((grid, tris));
-    }
-    let (grid, tris) = last.expect("at least one repetition");
-    Ok(Limitray { grid, tris, parts })
+    let t0 = Instant::now();
+    let table = embree_table(mesh)?;
+    let t1 = Instant::now();
+    let (grid, t2) = GridMesh::dice_staged(&table, mesh, &options, None, shading_normals)?;
+    let t3 = Instant::now();
+    // The triangle BVH needs the full diced mesh (every triangle's record).
+    let diced = dice(&table, mesh, &options)?;
+    drop(table);
+    let t4 = Instant::now();
+    let tris = MeshBvh::build(diced);
+    let t5 = Instant::now();
+    let parts =
+        [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)].map(|(a, b)| (b - a).as_secs_f64());
+    Ok((Limitray { grid, tris }, parts))
 }
 
-/// Embree's three scenes, with the seconds of each build per repetition and the bytes each
-/// added to the device.
+/// Embree's three scenes, with the bytes each added to the device.
 struct Embree {
     tris: Scene,
     sub: Scene,
     robust: Scene,
-    parts: [Vec<f64>; 3],
     bytes: [usize; 3],
 }
 
+/// Builds [`Embree`] once (its triangle scenes from limitray's diced triangles `diced`), with
+/// the seconds of each scene's build.
 fn build_embree(
     mesh: &ControlMesh,
     diced: &crate::dice::DicedMesh,
     rate: u32,
     device: &Device,
-    reps: usize,
     displace: Option<(f64, f64)>,
-) -> Result<Embree> {
-    let mut parts: [Vec<f64>; 3] = Default::default();
-    let mut bytes = [0usize; 3];
-    let mut last: Option<(Scene, Scene, Scene)> = None;
-    for _ in 0..reps.max(1) {
-        drop(last.take());
-        let m0 = device.memory_bytes();
-        let t0 = Instant::now();
-        let tris = triangle_scene(device, diced, SceneOptions::default())?;
-        let t1 = Instant::now();
-        let m1 = device.memory_bytes();
-        let sub = subdivision_scene_noise(
-            device,
-            mesh,
-            mesh.options.boundary,
-            rate as f32,
-            SceneOptions::default(),
-            displace,
-        )?;
-        let t2 = Instant::now();
-        let m2 = device.memory_bytes();
-        let robust = triangle_scene(
-            device,
-            diced,
-            SceneOptions {
-                robust: true,
-                ..SceneOptions::default()
-            },
-        )?;
-        let t3 = Instant::now();
-        let m3 = device.memory_bytes();
-        for (i, (a, b)) in [(t0, t1), (t1, t2), (t2, t3)].into_iter().enumerate() {
-            parts[i].push((b - a).as_secs_f64());
-        }
-        bytes = [m1 - m0, m2 - m1, m3 - m2].map(|b| b.max(0) as usize);
-        last = Some((tris, sub, robust));
-    }
-    let (tris, sub, robust) = last.expect("at least one repetition");
-    Ok(Embree {
-        tris,
-        sub,
-        robust,
+) -> Result<(Embree, [f64; 3])> {
+    let m0 = device.memory_bytes();
+    let t0 = Instant::now();
+    let tris = triangle_scene(device, diced, SceneOptions::default())?;
+    let t1 = Instant::now();
+    let m1 = device.memory_bytes();
+    let sub = subdivision_scene_noise(
+        device,
+        mesh,
+        mesh.options.boundary,
+        rate as f32,
+        SceneOptions::default(),
+        displace,
+    )?;
+    let t2 = Instant::now();
+    let m2 = device.memory_bytes();
+    let robust = triangle_scene(
+        device,
+        diced,
+        SceneOptions {
+            robust: true,
+            ..SceneOptions::default()
+        },
+    )?;
+    let t3 = Instant::now();
+    let m3 = device.memory_bytes();
+    let parts = [(t0, t1), (t1, t2), (t2, t3)].map(|(a, b)| (b - a).as_secs_f64());
+    let bytes = [m1 - m0, m2 - m1, m3 - m2].map(|b| b.max(0) as usize);
+    Ok((
+        Embree {
+            tris,
+            sub,
+            robust,
+            bytes,
+        },
         parts,
-        bytes,
-    })
+    ))
+}
+
+/// Lets the threads of the build that just ended go to sleep before anything is timed: Embree's
+/// build workers (TBB) and rayon's spin for a moment after their last task, and a spinning
+/// worker would take a core from the next engine's measurement.
+fn settle() {
+    std::thread::sleep(std::time::Duration::from_millis(50));
 }
 
 /// Runs the side-by-side benchmark on `mesh`.
@@ -629,108 +637,154 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     let incoherent = rays::incoherent(bounds, opts.rays, opts.seed);
     let diag = mesh.diagonal();
     let depth = 0.05 * diag;
-    let measure = |name: &'static str,
-                   engine: &dyn Engine,
-                   build_s: f64,
-                   build_parts: Vec<(&'static str, f64)>,
-                   bytes: Option<usize>,
-                   leak_rays: &[TestRay]| {
-        let (coh, coh_hits) = throughput(engine, &coherent, opts.reps, false);
-        let (inc, inc_hits) = throughput(engine, &incoherent, opts.reps, false);
-        let (any, _) = throughput(engine, &incoherent, opts.reps, true);
-        EngineResult {
-            name,
-            build_s,
-            bytes,
-            build_parts,
-            coherent_rays_per_s: coh,
-            incoherent_rays_per_s: inc,
-            anyhit_rays_per_s: any,
-            coherent_hits: coh_hits,
-            incoherent_hits: inc_hits,
-            leaks: leaks(engine, leak_rays),
-            leaks_far: 0,
-        }
-    };
+    let reps = opts.reps.max(1);
+    let device = Device::with_threads(opts.threads)?;
 
-    // limitray first, before Embree has started any worker threads, so that nothing of
-    // Embree's runs during limitray's measurements.
-    let lr = build_limitray(
-        mesh,
-        opts.rate,
-        opts.reps,
-        opts.displace,
-        opts.shading_normals,
-    )?;
+    // The builds, round by round: limitray's structures, then Embree's scenes (its triangle
+    // scenes take limitray's diced triangles); each engine's previous build is freed just
+    // before its next one, so that both engines build after a large free, as before.
+    let (mut lr, mut em) = (None, None);
+    let mut lr_parts: [Vec<f64>; 5] = Default::default();
+    let mut em_parts: [Vec<f64>; 3] = Default::default();
+    for _ in 0..reps {
+        drop(lr.take());
+        let (l, p) = build_limitray(mesh, opts.rate, opts.displace, opts.shading_normals)?;
+        settle();
+        drop(em.take());
+        let (e, q) = build_embree(mesh, &l.tris.diced, opts.rate, &device, opts.displace)?;
+        settle();
+        for (v, x) in lr_parts.iter_mut().zip(p) {
+            v.push(x);
+        }
+        for (v, x) in em_parts.iter_mut().zip(q) {
+            v.push(x);
+        }
+        (lr, em) = (Some(l), Some(e));
+    }
+    let (lr, em): (Limitray, Embree) = (
+        lr.expect("at least one repetition"),
+        em.expect("at least one repetition"),
+    );
+    // The reference intersector (it does not depend on the rate; it traces undisplaced
+    // surfaces only).
+    let exact = match opts.displace {
+        None => Some(build_exact(mesh, reps)?),
+        Some(_) => None,
+    };
+    settle();
     let targets = leak_targets(mesh, &lr.tris, opts.seed);
     let leak_rays = rays::towards_points(&targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
-    let p = &lr.parts;
-    let med = |i: usize| median(p[i].clone());
-    let total = |dice: usize, last: usize| {
-        median(
-            (0..p[0].len())
-                .map(|r| p[0][r] + p[dice][r] + p[last][r])
-                .collect(),
-        )
-    };
-    let mut results = vec![
-        measure(
-            "limitray",
-            &lr.grid,
-            total(1, 2),
-            vec![("patch_table", med(0)), ("dice", med(1)), ("grid", med(2))],
-            Some(lr.grid.bytes()),
-            &leak_rays,
-        ),
-        measure(
-            "limitray-triangles",
-            &lr.tris,
-            total(3, 4),
-            vec![("patch_table", med(0)), ("dice", med(3)), ("bvh", med(4))],
-            Some(lr.tris.bytes() - lr.tris.diced.bytes()),
-            &leak_rays,
-        ),
-    ];
     let triangles = lr.tris.diced.triangles.len();
 
-    let device = Device::with_threads(opts.threads)?;
-    let em = build_embree(
-        mesh,
-        &lr.tris.diced,
-        opts.rate,
-        &device,
-        opts.reps,
-        opts.displace,
-    )?;
-    drop(lr);
+    let p = &lr_parts;
+    let sum = |parts: &[usize]| -> Vec<f64> {
+        (0..reps)
+            .map(|r| parts.iter().map(|&i| p[i][r]).sum())
+            .collect()
+    };
+    let med = |v: &Vec<f64>| median(v.clone());
+    struct Entry<'a> {
+        name: &'static str,
+        engine: &'a dyn Engine,
+        build_s: Vec<f64>,
+        parts: Vec<(&'static str, f64)>,
+        bytes: Option<usize>,
+    }
+    let mut entries = vec![
+        Entry {
+            name: "limitray",
+            engine: &lr.grid,
+            build_s: sum(&[0, 1, 2]),
+            parts: vec![
+                ("patch_table", med(&p[0])),
+                ("dice", med(&p[1])),
+                ("grid", med(&p[2])),
+            ],
+            bytes: Some(lr.grid.bytes()),
+        },
+        Entry {
+            name: "limitray-triangles",
+            engine: &lr.tris,
+            build_s: sum(&[0, 3, 4]),
+            parts: vec![
+                ("patch_table", med(&p[0])),
+                ("dice", med(&p[3])),
+                ("bvh", med(&p[4])),
+            ],
+            bytes: Some(lr.tris.bytes() - lr.tris.diced.bytes()),
+        },
+    ];
     let names = ["embree-triangles", "embree-subdiv", "embree-tri-robust"];
-    let engines: [&dyn Engine; 3] = [&em.tris, &em.sub, &em.robust];
-    for (i, (name, engine)) in names.into_iter().zip(engines).enumerate() {
-        let build = median(em.parts[i].clone());
-        results.push(measure(
+    let scenes: [&dyn Engine; 3] = [&em.tris, &em.sub, &em.robust];
+    for (i, (name, engine)) in names.into_iter().zip(scenes).enumerate() {
+        entries.push(Entry {
             name,
             engine,
-            build,
-            vec![],
-            Some(em.bytes[i]),
-            &leak_rays,
-        ));
+            build_s: em_parts[i].clone(),
+            parts: vec![],
+            bytes: Some(em.bytes[i]),
+        });
     }
-    drop(em);
-    // The reference intersector on the same rays (it does not depend on the rate; it traces
-    // undisplaced surfaces only).
-    if opts.displace.is_none() {
-        let (exact, table_s, pieces_s) = build_exact(mesh, opts.reps)?;
-        results.push(measure(
-            "limitray-exact",
-            &exact,
-            table_s + pieces_s,
-            vec![("patch_table", table_s), ("pieces", pieces_s)],
-            None,
-            &leak_rays,
-        ));
+    if let Some((exact, [table_s, pieces_s])) = &exact {
+        entries.push(Entry {
+            name: "limitray-exact",
+            engine: exact,
+            build_s: (0..reps).map(|r| table_s[r] + pieces_s[r]).collect(),
+            parts: vec![("patch_table", med(table_s)), ("pieces", med(pieces_s))],
+            bytes: None,
+        });
     }
-    drop((coherent, incoherent));
+
+    // The rays, interleaved: in each round, each set of rays is traced by every engine in
+    // turn (the first engine of a round moves on by one each round), so that each engine's
+    // repetition `r` is taken within seconds of the others' and a slow stretch of a shared
+    // machine falls on all engines alike, not on whichever ran then.
+    let sets: [(&[TestRay], bool); 3] = [
+        (&coherent, false),
+        (&incoherent, false),
+        (&incoherent, true),
+    ];
+    let n = entries.len();
+    let mut speeds = vec![[Vec::new(), Vec::new(), Vec::new()]; n];
+    let mut hits = vec![[0usize; 2]; n];
+    for round in 0..reps {
+        for (k, &(rays, any)) in sets.iter().enumerate() {
+            for i in 0..n {
+                let e = (i + round) % n;
+                let (t, h) = trace(entries[e].engine, rays, any);
+                speeds[e][k].push(rays.len() as f64 / t);
+                if let Some(slot) = hits[e].get_mut(k) {
+                    *slot = h;
+                }
+            }
+        }
+    }
+    let mut results: Vec<EngineResult> = entries
+        .iter()
+        .zip(speeds)
+        .zip(&hits)
+        .map(|((e, [coherent, incoherent, anyhit]), h)| EngineResult {
+            name: e.name,
+            build_s: med(&e.build_s),
+            bytes: e.bytes,
+            build_parts: e.parts.clone(),
+            coherent_rays_per_s: med(&coherent),
+            incoherent_rays_per_s: med(&incoherent),
+            anyhit_rays_per_s: med(&anyhit),
+            coherent_hits: h[0],
+            incoherent_hits: h[1],
+            leaks: leaks(e.engine, &leak_rays),
+            leaks_far: 0,
+            samples: Samples {
+                build_s: e.build_s.clone(),
+                coherent,
+                incoherent,
+                anyhit,
+            },
+        })
+        .collect();
+    drop(entries);
+    drop((exact, em, lr, coherent, incoherent));
 
     // The translated copy, for the far leak count (built after the first is freed).
     let mut far = mesh.clone();
@@ -739,19 +793,12 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
             p[k] += FAR_OFFSET[k];
         }
     }
-    let far_lr = build_limitray(&far, opts.rate, 1, opts.displace, opts.shading_normals)?;
+    let (far_lr, _) = build_limitray(&far, opts.rate, opts.displace, opts.shading_normals)?;
     let far_targets = leak_targets(&far, &far_lr.tris, opts.seed);
     let far_rays = rays::towards_points(&far_targets, depth, opts.leak_rays, opts.seed ^ 0x1EA4);
     results[0].leaks_far = leaks(&far_lr.grid, &far_rays);
     results[1].leaks_far = leaks(&far_lr.tris, &far_rays);
-    let far_em = build_embree(
-        &far,
-        &far_lr.tris.diced,
-        opts.rate,
-        &device,
-        1,
-        opts.displace,
-    )?;
+    let (far_em, _) = build_embree(&far, &far_lr.tris.diced, opts.rate, &device, opts.displace)?;
     drop(far_lr);
     let far_engines: [&dyn Engine; 3] = [&far_em.tris, &far_em.sub, &far_em.robust];
     for (r, engine) in results[2..5].iter_mut().zip(far_engines) {
@@ -759,7 +806,7 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
     }
     drop(far_em);
     if let Some(r) = results.get_mut(5) {
-        let (far_exact, _, _) = build_exact(&far, 1)?;
+        let (far_exact, _) = build_exact(&far, 1)?;
         r.leaks_far = leaks(&far_exact, &far_rays);
     }
     Ok(BenchReport {
