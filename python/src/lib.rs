@@ -93,7 +93,8 @@ struct Surface {
     max_level: usize,
     warnings: Vec<String>,
     /// BVHs of the diced surface, by uniform rate.
-    bvhs: Mutex<HashMap<u32, Arc<GridMesh>>>,
+    /// The grid cores built so far, by rate and whether they store shading normals.
+    bvhs: Mutex<HashMap<(u32, bool), Arc<GridMesh>>>,
     /// Displacement of the diced surface along its limit normal.
     displace: Option<Displacement>,
     /// Limit texture coordinates, built by the first query.
@@ -148,22 +149,25 @@ impl Surface {
         Ok(self.exact.get_or_init(|| t))
     }
 
-    fn bvh(&self, rate: u32) -> Result<Arc<GridMesh>, Error> {
+    /// The grid core at `rate`, with its vertices' shading normals or built for tracing alone
+    /// (`GridMesh::dice_geometry`: the same hits, their shading normal the geometric one).
+    fn bvh(&self, rate: u32, shading_normals: bool) -> Result<Arc<GridMesh>, Error> {
         let mut cache = self
             .bvhs
             .lock()
             .map_err(|_| Error::new(ErrorKind::Usage, "BVH cache poisoned by a panic"))?;
-        if let Some(b) = cache.get(&rate) {
+        if let Some(b) = cache.get(&(rate, shading_normals)) {
             return Ok(b.clone());
         }
         // Diced straight into the grid core: `GridMesh::build` of `dice`'s mesh, bit for bit
         // (tests/grid.rs), without the diced mesh in between.
-        let b = Arc::new(GridMesh::dice(
-            &self.table,
-            &self.mesh,
-            &self.dice_options(rate),
-        )?);
-        cache.insert(rate, b.clone());
+        let opts = self.dice_options(rate);
+        let b = Arc::new(if shading_normals {
+            GridMesh::dice(&self.table, &self.mesh, &opts)?
+        } else {
+            GridMesh::dice_geometry(&self.table, &self.mesh, &opts)?
+        });
+        cache.insert((rate, shading_normals), b.clone());
         Ok(b)
     }
 }
@@ -356,7 +360,7 @@ impl Surface {
 
     /// Closest hits of rays on the limit surface diced at `rate`: a dict of arrays (see the
     /// package's `Surface.trace`).
-    #[pyo3(signature = (origins, directions, rate=16, exact=false))]
+    #[pyo3(signature = (origins, directions, rate=16, exact=false, shading_normals=true))]
     fn trace<'py>(
         &self,
         py: Python<'py>,
@@ -364,6 +368,7 @@ impl Surface {
         directions: PyReadonlyArray2<'py, f64>,
         rate: u32,
         exact: bool,
+        shading_normals: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         check_rate(rate)?;
         if exact && self.displace.is_some() {
@@ -421,7 +426,7 @@ impl Surface {
                 }
                 return Ok(out);
             }
-            let bvh = self.bvh(rate).map_err(py_err)?;
+            let bvh = self.bvh(rate, shading_normals).map_err(py_err)?;
             for h in bvh.intersect_batch(&rays) {
                 match h {
                     None => out.miss(),

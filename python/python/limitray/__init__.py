@@ -129,7 +129,7 @@ class Surface:
         m = self._s.uv(*_samples(face, u, v, k))
         return {"st": m[:, 0:2], "du": m[:, 2:4], "dv": m[:, 4:6]}
 
-    def trace(self, origins, directions, rate=16, exact=False):
+    def trace(self, origins, directions, rate=16, exact=False, shading_normals=True):
         """Closest hits of rays (``origins``, ``directions``: (N, 3)) on the limit surface
         diced ``rate`` segments per face edge, as ``limitray trace``: the diced surface is
         traced with the rays rounded to float32 (like the CLI).
@@ -145,12 +145,18 @@ class Surface:
         infinitely sharp features, and ``"grazing"``: bool (N,), rays that touch the surface
         tangentially within ``err``. The BVH of each rate is built once
         and kept.
+
+        With ``shading_normals=False`` the diced surface is built for tracing alone (no
+        vertex normals: a faster build and less memory, as ``limitray bench
+        --no-shading-normals``): the hits are the same, bit for bit, and ``"n"`` is the unit
+        geometric normal of the diced triangle hit instead of the interpolated limit normal.
+        It does not change ``exact`` traces, whose normal is the exact surface's.
         """
         o = _floats("origins", origins, np.float64, shape=3)
         d = _floats("directions", directions, np.float64, shape=3)
         if o.shape != d.shape:
             raise ValueError(f"origins {o.shape} and directions {d.shape} differ in shape")
-        return self._s.trace(o, d, int(rate), bool(exact))
+        return self._s.trace(o, d, int(rate), bool(exact), bool(shading_normals))
 
     def refine(self, level, limit=False):
         """Uniform refinement to ``level``, as ``limitray refine --level``.
