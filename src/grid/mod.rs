@@ -36,7 +36,7 @@ use crate::oct::oct_decode3;
 use block::{slot, Block, Slot};
 use node::{child_of, in_order, test4, Box4};
 use rayon::prelude::*;
-use top::Top;
+use top::{Top, Visit};
 use window::{lane_mask, Rows};
 
 /// A triangle outside the grids, with everything its hits need.
@@ -148,6 +148,154 @@ struct Best {
     b2: f32,
 }
 
+/// What [`GridMesh::walk_block`] does at each window met (a trait, not a closure: see
+/// [`Visit`]).
+trait Leaf {
+    /// Tests window `(wx, wy)` of block `b` within `tmax`: the new `tmax` and whether to stop.
+    fn leaf(&mut self, b: &Block, wx: usize, wy: usize, tmax: f32) -> (f32, bool);
+}
+
+/// A closest-hit query's walk: the nearest hit so far (ties to the lowest triangle id).
+struct Closest<'a, const AVX2: bool> {
+    mesh: &'a GridMesh,
+    r: &'a PreparedRay,
+    /// The block being walked.
+    block: u32,
+    best: Option<Best>,
+}
+
+impl<'a, const AVX2: bool> Closest<'a, AVX2> {
+    /// # Safety
+    /// With `AVX2`, the processor must have AVX2 (its methods run the AVX2 leaf test).
+    unsafe fn new(mesh: &'a GridMesh, r: &'a PreparedRay) -> Self {
+        Closest {
+            mesh,
+            r,
+            block: 0,
+            best: None,
+        }
+    }
+}
+
+impl<const AVX2: bool> Leaf for Closest<'_, AVX2> {
+    #[inline(always)]
+    fn leaf(&mut self, b: &Block, wx: usize, wy: usize, tmax: f32) -> (f32, bool) {
+        let (w, lanes) = self.mesh.window(b, wx, wy);
+        // SAFETY: with `AVX2` the processor has AVX2 (the contract of `Closest::new`).
+        let found = unsafe { window::window_with::<AVX2>(self.r, &w, lanes, tmax) };
+        if let Some((l, t, b1, b2)) = found {
+            let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
+            let (x, y) = (2 * wx + qx, 2 * wy + qy);
+            let id = b.triangle(x, y, h);
+            if self.best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+                self.mesh.prefetch_record(b, x, y);
+                self.best = Some(Best {
+                    at: Found::Grid(self.block, x as u8, y as u8, h as u8),
+                    id,
+                    t,
+                    b1,
+                    b2,
+                });
+                return (t, false);
+            }
+        }
+        (tmax, false)
+    }
+}
+
+impl<const AVX2: bool> Visit for Closest<'_, AVX2> {
+    #[inline(always)]
+    fn visit(&mut self, prim: u32, tmax: f32) -> (f32, bool) {
+        let (mesh, r) = (self.mesh, self.r);
+        let nblocks = mesh.blocks.len();
+        let prim = prim as usize;
+        if prim < nblocks {
+            self.block = prim as u32;
+            let (t, _) = mesh.walk_block::<true>(prim, r, tmax, self);
+            return (t, false);
+        }
+        let [first, count] = mesh.strips[prim - nblocks];
+        let mut tmax = tmax;
+        for li in first..first + count {
+            let tri = &mesh.loose[li as usize];
+            let [a, b, c] = tri.p;
+            if let Some((t, b1, b2)) = intersect_prepared(r, a, b, c, tmax) {
+                if self
+                    .best
+                    .is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id))
+                {
+                    self.best = Some(Best {
+                        at: Found::Loose(li),
+                        id: tri.id,
+                        t,
+                        b1,
+                        b2,
+                    });
+                    tmax = t;
+                }
+            }
+        }
+        (tmax, false)
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, prim: u32) {
+        self.mesh.prefetch::<true>(prim);
+    }
+}
+
+/// An any-hit query's walk: whether anything was hit.
+struct Occluded<'a, const AVX2: bool> {
+    mesh: &'a GridMesh,
+    r: &'a PreparedRay,
+    hit: bool,
+}
+
+impl<'a, const AVX2: bool> Occluded<'a, AVX2> {
+    /// # Safety
+    /// With `AVX2`, the processor must have AVX2 (its methods run the AVX2 leaf test).
+    unsafe fn new(mesh: &'a GridMesh, r: &'a PreparedRay) -> Self {
+        Occluded {
+            mesh,
+            r,
+            hit: false,
+        }
+    }
+}
+
+impl<const AVX2: bool> Leaf for Occluded<'_, AVX2> {
+    #[inline(always)]
+    fn leaf(&mut self, b: &Block, wx: usize, wy: usize, tmax: f32) -> (f32, bool) {
+        let (w, lanes) = self.mesh.window(b, wx, wy);
+        // SAFETY: with `AVX2` the processor has AVX2 (the contract of `Occluded::new`).
+        let found = unsafe { window::window_with::<AVX2>(self.r, &w, lanes, tmax) };
+        (tmax, found.is_some())
+    }
+}
+
+impl<const AVX2: bool> Visit for Occluded<'_, AVX2> {
+    #[inline(always)]
+    fn visit(&mut self, prim: u32, tmax: f32) -> (f32, bool) {
+        let (mesh, r) = (self.mesh, self.r);
+        let nblocks = mesh.blocks.len();
+        let prim = prim as usize;
+        self.hit = if prim < nblocks {
+            mesh.walk_block::<false>(prim, r, tmax, self).1
+        } else {
+            let [first, count] = mesh.strips[prim - nblocks];
+            mesh.loose[first as usize..(first + count) as usize]
+                .iter()
+                .any(|l| intersect_prepared(r, l.p[0], l.p[1], l.p[2], tmax).is_some())
+        };
+        (tmax, self.hit)
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, prim: u32) {
+        self.mesh.prefetch::<false>(prim);
+    }
+}
+
 impl GridMesh {
     /// Prefetches what visiting primitive `prim` reads first: a block's header and root, its
     /// quadrant nodes and its vertices; with `NORMALS`, its vertices' normals too, which a
@@ -245,15 +393,15 @@ impl GridMesh {
     }
 
     /// Walks block `bi`'s hierarchy front to back (in child order without `ORDERED`: any-hit
-    /// queries), calling `leaf(wx, wy, tmax)` for each window met; `leaf` returns the new
-    /// `tmax` and whether to stop.
+    /// queries), calling [`Leaf::leaf`] for each window met, which returns the new `tmax` and
+    /// whether to stop.
     #[inline(always)]
     fn walk_block<const ORDERED: bool>(
         &self,
         bi: usize,
         r: &PreparedRay,
         mut tmax: f32,
-        leaf: &mut impl FnMut(&Block, usize, usize, f32) -> (f32, bool),
+        leaf: &mut impl Leaf,
     ) -> (f32, bool) {
         let b = &self.blocks[bi];
         let boxes = &self.boxes[b.boxes as usize..b.boxes as usize + b.num_boxes()];
@@ -267,7 +415,7 @@ impl GridMesh {
             }
             match slot(b, 0, c) {
                 Slot::Window(wx, wy) => {
-                    let (t, stop) = leaf(b, wx, wy, tmax);
+                    let (t, stop) = leaf.leaf(b, wx, wy, tmax);
                     tmax = t;
                     if stop {
                         return (tmax, true);
@@ -283,7 +431,7 @@ impl GridMesh {
                             continue;
                         }
                         if let Slot::Window(wx, wy) = slot(b, q, c2) {
-                            let (t, stop) = leaf(b, wx, wy, tmax);
+                            let (t, stop) = leaf.leaf(b, wx, wy, tmax);
                             tmax = t;
                             if stop {
                                 return (tmax, true);
@@ -326,63 +474,11 @@ impl GridMesh {
     #[inline(always)]
     unsafe fn intersect_with<const AVX2: bool>(&self, ray: &Ray) -> Option<Hit> {
         let r = PreparedRay::new(ray)?;
-        let mut best: Option<Best> = None;
-        let nblocks = self.blocks.len();
-        let visit = |prim: u32, tmax: f32| {
-            let prim = prim as usize;
-            if prim < nblocks {
-                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
-                    let (w, lanes) = self.window(b, wx, wy);
-                    // SAFETY: this function's contract.
-                    let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
-                    if let Some((l, t, b1, b2)) = found {
-                        let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
-                        let (x, y) = (2 * wx + qx, 2 * wy + qy);
-                        let id = b.triangle(x, y, h);
-                        if best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
-                            self.prefetch_record(b, x, y);
-                            best = Some(Best {
-                                at: Found::Grid(prim as u32, x as u8, y as u8, h as u8),
-                                id,
-                                t,
-                                b1,
-                                b2,
-                            });
-                            return (t, false);
-                        }
-                    }
-                    (tmax, false)
-                };
-                let (t, _) = self.walk_block::<true>(prim, &r, tmax, &mut leaf);
-                (t, false)
-            } else {
-                let [first, count] = self.strips[prim - nblocks];
-                let mut tmax = tmax;
-                for li in first..first + count {
-                    let tri = &self.loose[li as usize];
-                    let [a, b, c] = tri.p;
-                    if let Some((t, b1, b2)) = intersect_prepared(&r, a, b, c, tmax) {
-                        if best.is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id)) {
-                            best = Some(Best {
-                                at: Found::Loose(li),
-                                id: tri.id,
-                                t,
-                                b1,
-                                b2,
-                            });
-                            tmax = t;
-                        }
-                    }
-                }
-                (tmax, false)
-            }
-        };
         // SAFETY: this function's contract.
-        unsafe {
-            self.top
-                .walk::<AVX2, true>(&r, r.tmax, visit, |p| self.prefetch::<true>(p))
-        };
-        best.map(|b| self.hit(b))
+        let mut v = unsafe { Closest::<AVX2>::new(self, &r) };
+        // SAFETY: this function's contract.
+        unsafe { self.top.walk::<AVX2, true>(&r, r.tmax, &mut v) };
+        v.best.map(|b| self.hit(b))
     }
 
     /// True if anything is hit in `[tmin, tmax]`.
@@ -416,32 +512,11 @@ impl GridMesh {
         let Some(r) = PreparedRay::new(ray) else {
             return false;
         };
-        let mut hit = false;
-        let nblocks = self.blocks.len();
-        let visit = |prim: u32, tmax: f32| {
-            let prim = prim as usize;
-            if prim < nblocks {
-                let mut leaf = |b: &Block, wx: usize, wy: usize, tmax: f32| {
-                    let (w, lanes) = self.window(b, wx, wy);
-                    // SAFETY: this function's contract.
-                    let found = unsafe { window::window_with::<AVX2>(&r, &w, lanes, tmax) };
-                    (tmax, found.is_some())
-                };
-                hit = self.walk_block::<false>(prim, &r, tmax, &mut leaf).1;
-            } else {
-                let [first, count] = self.strips[prim - nblocks];
-                hit = self.loose[first as usize..(first + count) as usize]
-                    .iter()
-                    .any(|l| intersect_prepared(&r, l.p[0], l.p[1], l.p[2], tmax).is_some());
-            }
-            (tmax, hit)
-        };
         // SAFETY: this function's contract.
-        unsafe {
-            self.top
-                .walk::<AVX2, false>(&r, r.tmax, visit, |p| self.prefetch::<false>(p))
-        };
-        hit
+        let mut v = unsafe { Occluded::<AVX2>::new(self, &r) };
+        // SAFETY: this function's contract.
+        unsafe { self.top.walk::<AVX2, false>(&r, r.tmax, &mut v) };
+        v.hit
     }
 
     /// Closest hits of many rays, in parallel.

@@ -44,6 +44,19 @@ impl Node8 {
     };
 }
 
+/// What [`Top::walk`] does at the primitives it reaches. A trait rather than closures:
+/// closures do not inherit a function's `#[target_feature]`, so a closure's body was compiled
+/// for the baseline instruction set and called from the AVX2 walk, not inlined into it (with
+/// its own calls to the AVX2 leaf test). Implementations mark both methods
+/// `#[inline(always)]`.
+pub trait Visit {
+    /// Visits primitive `prim`, which the ray meets within `tmax`: the new `tmax` and whether
+    /// to stop.
+    fn visit(&mut self, prim: u32, tmax: f32) -> (f32, bool);
+    /// Prefetches what visiting `prim` reads first, when it is reached or pushed.
+    fn prefetch(&self, prim: u32);
+}
+
 /// The top level.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Top {
@@ -147,9 +160,9 @@ impl Top {
     }
 
     /// Walks the top level front to back: `visit(prim, tmax)` for each primitive whose box the
-    /// ray meets within the current `tmax`, returning the new `tmax` and whether to stop;
-    /// `prefetch(prim)` when a primitive is reached or pushed. The node test is [`test8`]'s
-    /// with `AVX2`.
+    /// ray meets within the current `tmax` ([`Visit::visit`], which returns the new `tmax`
+    /// and whether to stop), and [`Visit::prefetch`] when a primitive is reached or pushed.
+    /// The node test is [`test8`]'s with `AVX2`.
     ///
     /// The nearest child met goes on at once, without the stack; only the others are pushed,
     /// far to near, with their entry distances, and skipped when popped beyond `tmax`.
@@ -165,8 +178,7 @@ impl Top {
         &self,
         r: &PreparedRay,
         mut tmax: f32,
-        mut visit: impl FnMut(u32, f32) -> (f32, bool),
-        prefetch: impl Fn(u32),
+        v: &mut impl Visit,
     ) {
         if self.root == EMPTY || r.tmin > tmax {
             return;
@@ -185,7 +197,7 @@ impl Top {
         let mut node = self.root;
         loop {
             if node & LEAF != 0 {
-                let (t, stop) = visit(node & !LEAF, tmax);
+                let (t, stop) = v.visit(node & !LEAF, tmax);
                 tmax = t;
                 if stop {
                     return;
@@ -198,7 +210,7 @@ impl Top {
                     if mask & (mask - 1) == 0 {
                         node = n.child[mask.trailing_zeros() as usize];
                         if node & LEAF != 0 {
-                            prefetch(node & !LEAF);
+                            v.prefetch(node & !LEAF);
                         }
                         continue;
                     }
@@ -217,7 +229,7 @@ impl Top {
                         let c = child_of(k);
                         let child = n.child[c];
                         if child & LEAF != 0 {
-                            prefetch(child & !LEAF);
+                            v.prefetch(child & !LEAF);
                         } else {
                             prefetch_node(&self.nodes, child);
                         }
@@ -226,7 +238,7 @@ impl Top {
                     }
                     node = n.child[child_of(keys[0])];
                     if node & LEAF != 0 {
-                        prefetch(node & !LEAF);
+                        v.prefetch(node & !LEAF);
                     }
                     continue;
                 }
@@ -275,6 +287,17 @@ mod tests {
     use crate::bvh::Ray;
     use crate::harness::rng::SplitMix64;
 
+    /// Counts the visits of each primitive.
+    struct Seen(Vec<u32>);
+
+    impl Visit for Seen {
+        fn visit(&mut self, prim: u32, tmax: f32) -> (f32, bool) {
+            self.0[prim as usize] += 1;
+            (tmax, false)
+        }
+        fn prefetch(&self, _: u32) {}
+    }
+
     /// The walk visits every primitive whose box the ray meets (brute force over the boxes),
     /// each once, on random boxes of many sizes.
     #[test]
@@ -319,23 +342,20 @@ mod tests {
                     (false, &on_heap, true),
                     (avx, &top, false),
                 ] {
-                    let mut seen = vec![0u32; n];
-                    let visit = |p: u32, t| {
-                        seen[p as usize] += 1;
-                        (t, false)
-                    };
+                    let mut seen = Seen(vec![0u32; n]);
+                    let v = &mut seen;
                     // SAFETY: AVX2 only where detected.
                     unsafe {
                         match (wide, ordered) {
-                            (true, true) => top.walk::<true, true>(&r, INF, visit, |_| {}),
-                            (true, false) => top.walk::<true, false>(&r, INF, visit, |_| {}),
-                            (false, true) => top.walk::<false, true>(&r, INF, visit, |_| {}),
-                            (false, false) => top.walk::<false, false>(&r, INF, visit, |_| {}),
+                            (true, true) => top.walk::<true, true>(&r, INF, v),
+                            (true, false) => top.walk::<true, false>(&r, INF, v),
+                            (false, true) => top.walk::<false, true>(&r, INF, v),
+                            (false, false) => top.walk::<false, false>(&r, INF, v),
                         }
                     }
                     for (p, b) in boxes.iter().enumerate() {
                         let want = r.hits_box(b[0], b[1], f32::INFINITY);
-                        assert_eq!(seen[p], u32::from(want), "n {n}, ray {i}, prim {p}");
+                        assert_eq!(seen.0[p], u32::from(want), "n {n}, ray {i}, prim {p}");
                     }
                 }
             }
