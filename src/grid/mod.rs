@@ -148,6 +148,12 @@ struct Best {
     b2: f32,
 }
 
+/// Whether a hit at `t` on triangle `id` beats `best`: nearer, or as near on a lower id.
+#[inline(always)]
+fn beats(best: Option<Best>, t: f32, id: u32) -> bool {
+    best.is_none_or(|x| t < x.t || (t == x.t && id < x.id))
+}
+
 /// What [`GridMesh::walk_block`] does at each window met (a trait, not a closure: see
 /// [`Visit`]).
 trait Leaf {
@@ -187,7 +193,7 @@ impl<const AVX2: bool> Leaf for Closest<'_, AVX2> {
             let (qy, qx, h) = (l / 4, (l / 2) % 2, l % 2);
             let (x, y) = (2 * wx + qx, 2 * wy + qy);
             let id = b.triangle(x, y, h);
-            if self.best.is_none_or(|x| t < x.t || (t == x.t && id < x.id)) {
+            if beats(self.best, t, id) {
                 self.mesh.prefetch_record(b, x, y);
                 self.best = Some(Best {
                     at: Found::Grid(self.block, x as u8, y as u8, h as u8),
@@ -220,10 +226,7 @@ impl<const AVX2: bool> Visit for Closest<'_, AVX2> {
             let tri = &mesh.loose[li as usize];
             let [a, b, c] = tri.p;
             if let Some((t, b1, b2)) = intersect_prepared(r, a, b, c, tmax) {
-                if self
-                    .best
-                    .is_none_or(|x| t < x.t || (t == x.t && tri.id < x.id))
-                {
+                if beats(self.best, t, tri.id) {
                     self.best = Some(Best {
                         at: Found::Loose(li),
                         id: tri.id,
