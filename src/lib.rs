@@ -32,6 +32,7 @@ pub mod exact;
 pub mod gpu;
 pub mod grid;
 pub mod harness;
+pub mod huge_pages;
 pub mod io;
 pub mod lines;
 pub mod memory;

@@ -347,6 +347,7 @@ impl Planning {
         // Zeroed: the pages are first touched by the run that writes them, in parallel.
         self.plans = bytemuck::zeroed_vec(nplanned);
         self.headers = bytemuck::zeroed_vec(nplanned);
+        crate::huge_pages::advise(&mut self.headers);
         let mut jobs = Vec::with_capacity(runs.len());
         {
             let (mut p, mut h) = (&mut self.plans[..], &mut self.headers[..]);
@@ -379,6 +380,7 @@ impl Planning {
         // Window rows are read four values at a time: the last plane's last row reads past it
         // into four zeros (written now, with the arrays' lengths, in `finish`).
         m.coords = Vec::with_capacity(total.coords + 4);
+        crate::huge_pages::advise(&mut m.coords);
         for z in &mut m.coords.spare_capacity_mut()[total.coords..] {
             z.write(0.0);
         }
@@ -386,6 +388,9 @@ impl Planning {
         m.normals = Vec::with_capacity(normals);
         m.boxes = Vec::with_capacity(total.boxes);
         m.levels = Vec::with_capacity(total.levels);
+        crate::huge_pages::advise(&mut m.normals);
+        crate::huge_pages::advise(&mut m.boxes);
+        crate::huge_pages::advise(&mut m.levels);
         let mut rest = Spare {
             coords: &mut m.coords.spare_capacity_mut()[..total.coords],
             normals: &mut m.normals.spare_capacity_mut()[..normals],

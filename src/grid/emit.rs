@@ -166,6 +166,7 @@ pub(super) fn nodes(bvh2: &Bvh2, collapse: &Collapse, boxes: &[Bounds]) -> (Vec<
         total += b.0.len();
     }
     let mut out: Vec<Node8> = Vec::with_capacity(total);
+    crate::huge_pages::advise(&mut out);
     {
         let (head, mut rest) = out.spare_capacity_mut()[..total].split_at_mut(first.len());
         let mut parts = Vec::with_capacity(blocks.len());
