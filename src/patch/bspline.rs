@@ -20,6 +20,18 @@ pub const IDENTITY: Mat4 = [
     [0.0, 0.0, 0.0, 1.0],
 ];
 
+/// The row vector `n` times `m` ([`Basis::transformed`]'s product, one vector of it).
+#[inline]
+pub fn row_times(n: &[f64; 4], m: &Mat4) -> [f64; 4] {
+    let mut out = [0.0; 4];
+    for (r, &nr) in n.iter().enumerate() {
+        for c in 0..4 {
+            out[c] += nr * m[r][c];
+        }
+    }
+    out
+}
+
 /// Values of the four uniform cubic B-spline basis functions on the segment `t ∈ [0, 1]`
 /// (control point 1 sits near `t = 0`, control point 2 near `t = 1`).
 #[inline]
@@ -80,19 +92,10 @@ impl Basis {
     /// `m`), so that evaluating the result on `P` equals evaluating `self` on `M P`.
     #[inline]
     pub fn transformed(&self, m: &Mat4) -> Self {
-        let mul = |n: &[f64; 4]| {
-            let mut out = [0.0; 4];
-            for (r, &nr) in n.iter().enumerate() {
-                for c in 0..4 {
-                    out[c] += nr * m[r][c];
-                }
-            }
-            out
-        };
         Basis {
-            w: mul(&self.w),
-            d1: mul(&self.d1),
-            d2: mul(&self.d2),
+            w: row_times(&self.w, m),
+            d1: row_times(&self.d1, m),
+            d2: row_times(&self.d2, m),
         }
     }
 

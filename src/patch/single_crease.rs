@@ -264,6 +264,15 @@ impl CreaseCurve {
         Basis::at(t).transformed(&self.segments[self.segment_index(t)].matrix)
     }
 
+    /// [`Self::basis`]'s weights alone (the same bits), without the derivatives' weights.
+    #[inline]
+    pub fn weights(&self, t: f64) -> [f64; 4] {
+        bspline::row_times(
+            &bspline::basis(t),
+            &self.segments[self.segment_index(t)].matrix,
+        )
+    }
+
     /// The curve with control points `p` at `t`: position, first and second derivative.
     pub fn eval(&self, p: &[[f64; 3]; 4], t: f64) -> [[f64; 3]; 3] {
         let b = self.basis(t);
@@ -405,6 +414,39 @@ pub(crate) fn basis_v(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -
         Basis::at(v)
     } else {
         across(crease_edge, curve, u, v)
+    }
+}
+
+/// [`basis_u`]'s weights alone (the same bits).
+#[inline]
+pub(crate) fn weights_u(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> [f64; 4] {
+    assert!(crease_edge < 4, "crease edge {crease_edge} is not in 0..4");
+    if curve.sharpness() == 0.0 || across_is_v(crease_edge) {
+        bspline::basis(u)
+    } else {
+        across_weights(crease_edge, curve, u, v)
+    }
+}
+
+/// [`basis_v`]'s weights alone (the same bits).
+#[inline]
+pub(crate) fn weights_v(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> [f64; 4] {
+    assert!(crease_edge < 4, "crease edge {crease_edge} is not in 0..4");
+    if curve.sharpness() == 0.0 || !across_is_v(crease_edge) {
+        bspline::basis(v)
+    } else {
+        across_weights(crease_edge, curve, u, v)
+    }
+}
+
+/// [`across`]'s weights alone (the same bits).
+#[inline]
+fn across_weights(crease_edge: usize, curve: &CreaseCurve, u: f64, v: f64) -> [f64; 4] {
+    let w = curve.weights(crease_parameter(crease_edge, u, v));
+    if reversed(crease_edge) {
+        [w[3], w[2], w[1], w[0]]
+    } else {
+        w
     }
 }
 

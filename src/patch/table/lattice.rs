@@ -113,21 +113,32 @@ impl PatchTable {
                     })
                 });
                 if !D1 {
-                    return alone(bspline::finish_v_p(&rows.0, &bspline::basis(t)));
+                    let w = kept.along_t.get(u32::MAX, t, || bspline::basis(t));
+                    return alone(bspline::finish_v_p(&rows.0, w));
                 }
                 bspline::finish_v(rows, &bspline::basis(t), &bspline::basis_d1(t))
             }
             PatchKind::SingleCrease { edge, sharpness } => {
-                let curve = kept.curve(p, sharpness as f64);
+                let i = kept.curve_index(p, sharpness as f64);
+                let curve = &kept.curves[i].1;
                 let edge = edge as usize;
+                if !D1 {
+                    // The weights alone, those along `t` kept for the next point of the leaf
+                    // and `t` (the row's next point).
+                    let rows = Rows::of(&frame, slots).get((p, 0), s, || {
+                        let w = single_crease::weights_u(edge, curve, s, t);
+                        contract::<D1>(&self.grid(patch), &w, || [0.0; 4])
+                    });
+                    let w = kept
+                        .along_t
+                        .get(p, t, || single_crease::weights_v(edge, curve, s, t));
+                    return alone(bspline::finish_v_p(&rows.0, w));
+                }
                 let rows = Rows::of(&frame, slots).get((p, 0), s, || {
                     let bu = single_crease::basis_u(edge, curve, s, t);
                     contract::<D1>(&self.grid(patch), &bu.w, || bu.d1)
                 });
                 let bv = single_crease::basis_v(edge, curve, s, t);
-                if !D1 {
-                    return alone(bspline::finish_v_p(&rows.0, &bv.w));
-                }
                 bspline::finish_v(rows, &bv.w, &bv.d1)
             }
             // A Stam patch's point in a regular sub-patch (not at the extraordinary corner):
@@ -157,7 +168,8 @@ impl PatchTable {
                     contract::<D1>(&grid, &bspline::basis(s2), || bspline::basis_d1(s2))
                 });
                 if !D1 {
-                    return alone(bspline::finish_v_p(&rows.0, &bspline::basis(t2)));
+                    let w = kept.along_t.get(u32::MAX, t2, || bspline::basis(t2));
+                    return alone(bspline::finish_v_p(&rows.0, w));
                 }
                 let pt = bspline::finish_v(rows, &bspline::basis(t2), &bspline::basis_d1(t2));
                 return frame.face_point_d1(pt);
@@ -243,6 +255,39 @@ pub(crate) struct Kept {
     curves: Vec<(u32, CreaseCurve)>,
     /// Regular sub-patches by Stam patch, depth and quadrant.
     grids: Vec<(u32, u8, u8, ControlGrid)>,
+    /// The last weights along a leaf's `t` (positions alone).
+    along_t: Weights,
+}
+
+/// The last weights computed along a leaf's `t`, with their key (the single-crease patch they
+/// are for, or `u32::MAX` for a B-spline's) and the `t` (its bits): the points of a lattice
+/// row in one leaf share them.
+struct Weights {
+    key: u32,
+    t: u64,
+    w: [f64; 4],
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Weights {
+            key: u32::MAX,
+            t: u64::MAX,
+            w: [0.0; 4],
+        }
+    }
+}
+
+impl Weights {
+    /// The weights of `key` at `t`: these, or `make()` when they are another's.
+    #[inline(always)]
+    fn get(&mut self, key: u32, t: f64, make: impl FnOnce() -> [f64; 4]) -> &[f64; 4] {
+        if self.key != key || self.t != t.to_bits() {
+            self.w = make();
+            (self.key, self.t) = (key, t.to_bits());
+        }
+        &self.w
+    }
 }
 
 impl Kept {
@@ -262,6 +307,7 @@ impl Kept {
     pub(crate) fn clear(&mut self) {
         self.curves.clear();
         self.grids.clear();
+        self.along_t = Weights::default();
     }
 }
 
@@ -387,15 +433,23 @@ impl PatchTable {
     }
 }
 
-impl LeafParts for Kept {
-    fn curve(&mut self, p: u32, sharpness: f64) -> &CreaseCurve {
-        let i = match self.curves.iter().position(|(q, _)| *q == p) {
+impl Kept {
+    /// Where single-crease patch `p`'s crease pieces are in `curves` (made the first time).
+    #[inline]
+    fn curve_index(&mut self, p: u32, sharpness: f64) -> usize {
+        match self.curves.iter().position(|(q, _)| *q == p) {
             Some(i) => i,
             None => {
                 self.curves.push((p, CreaseCurve::new(sharpness)));
                 self.curves.len() - 1
             }
-        };
+        }
+    }
+}
+
+impl LeafParts for Kept {
+    fn curve(&mut self, p: u32, sharpness: f64) -> &CreaseCurve {
+        let i = self.curve_index(p, sharpness);
         &self.curves[i].1
     }
 
@@ -443,7 +497,8 @@ mod tests {
 
     /// Every domain's lattice, at rates that put points on tree splits (even rates) and
     /// off them (odd), equals `eval_d1` point by point bit for bit (signs of zeros included),
-    /// in the same order, on meshes with B-spline, single-crease, Stam and end-cap leaves
+    /// in the same order (and its positions alone, `eval_domain_lattice_with::<false>`, the
+    /// same position bits), on meshes with B-spline, single-crease, Stam and end-cap leaves
     /// under trees.
     #[test]
     fn lattice_is_point_by_point_bit_for_bit() {
@@ -468,6 +523,14 @@ mod tests {
                             }
                         }
                         assert_eq!(got, want, "domain ({f}, {k}) at {nu} x {nv}");
+                        // The positions alone: the same position bits, zero derivatives.
+                        let mut alone = Vec::new();
+                        table.eval_domain_lattice_with::<false>(f, k, nu, nv, |pt| {
+                            alone.push(bits([pt.p, pt.du, pt.dv]));
+                        });
+                        let zero = [0.0f64.to_bits(); 3];
+                        let want_p: Vec<_> = want.iter().map(|w| [w[0], zero, zero]).collect();
+                        assert_eq!(alone, want_p, "domain ({f}, {k}) at {nu} x {nv}, alone");
                     }
                     // Which leaves the domain's tree holds (a B-spline root takes the
                     // column path, every other domain the tree path).
