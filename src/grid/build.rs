@@ -492,7 +492,28 @@ impl Planning {
             return Ok(m);
         }
         crate::stages::mark("grid: block bounds and strips");
-        m.top = Top::build(&prim_boxes);
+        // Each domain's blocks (consecutive, in its grid) one group, each strip its own.
+        let mut groups: Vec<std::ops::Range<u32>> = Vec::new();
+        for (i, h) in headers.iter().enumerate() {
+            match groups.last_mut() {
+                Some(g)
+                    if {
+                        let first = &headers[g.start as usize];
+                        (first.face, first.k) == (h.face, h.k)
+                    } =>
+                {
+                    g.end += 1
+                }
+                _ => groups.push(i as u32..i as u32 + 1),
+            }
+        }
+        groups.extend((headers.len()..prim_boxes.len()).map(|i| i as u32..i as u32 + 1));
+        let cells: Vec<[u32; 2]> = headers
+            .iter()
+            .map(|h| h.ij)
+            .chain(std::iter::repeat_n([0, 0], strips.len()))
+            .collect();
+        m.top = Top::build_grouped(&prim_boxes, &groups, &cells);
         // Block headers and strips stay in the order they were made (the mesh's), the order
         // of the blocks' vertices: put in the top level's depth-first order instead, the
         // headers cost the 316² grid 10 ms of gathering and the rays nothing (the same rays

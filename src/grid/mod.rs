@@ -25,6 +25,7 @@ pub mod block;
 mod build;
 pub mod collapse;
 mod emit;
+mod grouped;
 pub mod node;
 pub mod top;
 pub mod window;

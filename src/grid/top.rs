@@ -86,9 +86,29 @@ pub(super) fn union(a: Bounds, b: Bounds) -> Bounds {
 /// The empty box (the union's identity).
 pub(super) const NONE: Bounds = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
 
+/// Groups of primitives and each primitive's grid cell ([`Top::build_grouped`]).
+type Grouping<'a> = (&'a [std::ops::Range<u32>], &'a [[u32; 2]]);
+
 impl Top {
     /// Builds the top level over primitives with bounds `boxes` (`[min, max]`).
     pub fn build(boxes: &[[[f32; 3]; 2]]) -> Top {
+        Self::build_with(boxes, None)
+    }
+
+    /// [`Self::build`] over primitives in `groups` (consecutive ranges, together all of
+    /// them, none empty) that lie side by side in a grid, primitive `p` at grid cell
+    /// `cells[p]` of its group (a domain's blocks, each at the grid point of its first
+    /// vertex): the groups binned, each group's primitives split regularly below
+    /// (`grouped.rs`).
+    pub fn build_grouped(
+        boxes: &[[[f32; 3]; 2]],
+        groups: &[std::ops::Range<u32>],
+        cells: &[[u32; 2]],
+    ) -> Top {
+        Self::build_with(boxes, Some((groups, cells)))
+    }
+
+    fn build_with(boxes: &[[[f32; 3]; 2]], grouped: Option<Grouping<'_>>) -> Top {
         if boxes.is_empty() {
             return Top {
                 nodes: Vec::new(),
@@ -109,7 +129,13 @@ impl Top {
                 stack: 1,
             };
         }
-        let bvh2 = super::binned::build(boxes);
+        let bvh2 = match grouped {
+            // Groups of one primitive each: the same tree as binned over them.
+            Some((groups, cells)) if groups.len() < boxes.len() => {
+                super::grouped::build(boxes, groups, cells)
+            }
+            _ => super::binned::build(boxes),
+        };
         crate::stages::mark("grid: top-level binning");
         let collapse = Collapse::new(&bvh2);
         crate::stages::mark("grid: top-level collapse");
