@@ -57,7 +57,7 @@ pub(super) fn build(boxes: &[Bounds], groups: &[Range<u32>], cells: &[[u32; 2]])
         }
     }
     // The chunks' tree: binned over their boxes (one chunk: its own subtree at the root).
-    let over_groups = (chunks.len() >= 2).then(|| {
+    let over_chunks = (chunks.len() >= 2).then(|| {
         let chunk_boxes: Vec<Bounds> = chunks
             .iter()
             .map(|c| {
@@ -72,12 +72,12 @@ pub(super) fn build(boxes: &[Bounds], groups: &[Range<u32>], cells: &[[u32; 2]])
     nodes.reserve(2 * n - 2);
     let mut prims: Vec<u32> = Vec::with_capacity(n);
     enum Job {
-        /// A node of the groups' tree.
+        /// A node of the chunks' tree.
         Group(usize),
-        /// A group's primitives `ids[range]`.
+        /// Primitives `ids[range]` of one chunk.
         Cells(Range<usize>),
     }
-    let first = match &over_groups {
+    let first = match &over_chunks {
         Some(_) => Job::Group(0),
         None => Job::Cells(0..n),
     };
@@ -87,7 +87,7 @@ pub(super) fn build(boxes: &[Bounds], groups: &[Range<u32>], cells: &[[u32; 2]])
     while let Some((slot, job)) = stack.pop() {
         let range = match job {
             Job::Group(x) => {
-                let t = over_groups.as_ref().expect("a groups' tree");
+                let t = over_chunks.as_ref().expect("a chunks' tree");
                 let node = &t.nodes[x];
                 if node.prim_count == 0 {
                     let a = nodes.len();
@@ -116,7 +116,7 @@ pub(super) fn build(boxes: &[Bounds], groups: &[Range<u32>], cells: &[[u32; 2]])
         stack.push((a + 1, Job::Cells(range.start + mid..range.end)));
         stack.push((a, Job::Cells(range.start..range.start + mid)));
     }
-    // The boxes of the groups' inner nodes: each the union of its children's (children come
+    // Every inner node's box: the union of its children's (children come
     // after their parents), exact in any order.
     for i in (0..nodes.len()).rev() {
         if nodes[i].prim_count == 0 {

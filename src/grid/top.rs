@@ -98,9 +98,9 @@ impl Top {
     /// [`Self::build`] over primitives in `groups` (consecutive ranges, together all of
     /// them, none empty) that lie side by side in a grid, primitive `p` at grid cell
     /// `cells[p]` of its group (a domain's blocks, each at the grid point of its first
-    /// vertex): the groups binned, each group's primitives split regularly below
-    /// (`grouped.rs`).
-    pub fn build_grouped(
+    /// vertex): each group cut by its grid's regular splits into squares of at most four,
+    /// the squares binned, each square split regularly below its leaf (`grouped.rs`).
+    pub(crate) fn build_grouped(
         boxes: &[[[f32; 3]; 2]],
         groups: &[std::ops::Range<u32>],
         cells: &[[u32; 2]],
