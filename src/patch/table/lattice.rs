@@ -127,7 +127,7 @@ impl PatchTable {
                     // and `t` (the row's next point).
                     let rows = Rows::of(&frame, slots).get((p, 0), s, || {
                         let w = single_crease::weights_u(edge, curve, s, t);
-                        contract::<D1>(&self.grid(patch), &w, || [0.0; 4])
+                        contract::<false>(&self.grid(patch), &w, || [0.0; 4])
                     });
                     let w = kept
                         .along_t
