@@ -105,6 +105,12 @@ pub struct EngineResult {
     pub leaks: usize,
     /// Leaks of the leak rays, mesh translated to [`FAR_OFFSET`].
     pub leaks_far: usize,
+    /// For `limitray-exact` alone: of its far leaks, the rays that miss the limit surface
+    /// itself ([`far_misses_off_surface`]). The leak rays aim at points of the diced
+    /// triangles, which far from the origin are `f32` points up to half an `f32` step
+    /// (0.0078 at [`FAR_OFFSET`]) off the surface, so some rays pass beside it. What is left,
+    /// `leaks_far` minus these, is what the distance from the origin cost the intersector.
+    pub far_misses_off_surface: Option<usize>,
     /// Every repetition's measurement, in the order they were taken (the figures above are
     /// their medians): build seconds, and coherent, incoherent and any-hit rays per second.
     /// Repetition `r` of every engine was taken in the same round `r` of the interleaved
@@ -147,8 +153,9 @@ pub struct BenchReport {
 
 impl BenchReport {
     /// One JSON object per engine: `engine`, `build_ms`, `coherent_mrays_s`,
-    /// `incoherent_mrays_s`, `anyhit_mrays_s`, `bytes_per_triangle`, `leaks`, `leaks_far`,
-    /// with the run's settings (`mesh` is added by the CLI) and the build's parts.
+    /// `incoherent_mrays_s`, `anyhit_mrays_s`, `bytes_per_triangle`, `leaks`, `leaks_far`
+    /// (and `far_misses_off_surface`, [`EngineResult::far_misses_off_surface`]), with the
+    /// run's settings (`mesh` is added by the CLI) and the build's parts.
     pub fn json_lines(&self) -> Vec<serde_json::Value> {
         self.engines
             .iter()
@@ -171,6 +178,7 @@ impl BenchReport {
                     "incoherent_hits": e.incoherent_hits,
                     "leaks": e.leaks,
                     "leaks_far": e.leaks_far,
+                    "far_misses_off_surface": e.far_misses_off_surface,
                     "leak_rays": self.leak_rays,
                     "faces": self.faces,
                     "triangles": self.triangles,
@@ -252,6 +260,14 @@ impl BenchReport {
             "ratios are engine / limitray (build: lower is faster; rays: higher is faster); leaks of {} rays each\n",
             self.leak_rays
         ));
+        for e in &self.engines {
+            if let Some(off) = e.far_misses_off_surface {
+                s.push_str(&format!(
+                    "{}: {off} of its {} far leaks miss the limit surface itself (aimed at f32 points off it)\n",
+                    e.name, e.leaks_far
+                ));
+            }
+        }
         s
     }
 }
@@ -508,6 +524,24 @@ fn trace(engine: &dyn Engine, rays: &[TestRay], any: bool) -> (f64, usize) {
 
 fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
     rays.len() - trace(engine, rays, false).1
+}
+
+/// Of the rays `far` (the reference intersector of the mesh at [`FAR_OFFSET`]) misses, how
+/// many miss the limit surface itself: the ray moved back by [`FAR_OFFSET`] is a certain miss
+/// (no hit, no graze) of `near`, the same mesh in place. The move is exact (the offset is a
+/// whole number, the origin an `f32`: their difference is an `f32` too), and the two surfaces
+/// differ only by the rounding of the far control points (about 3e-11 at this offset), far
+/// below any tolerance here. A far miss that `near` hits is a leak that distance caused.
+pub fn far_misses_off_surface(far: &ExactTracer, near: &ExactTracer, rays: &[TestRay]) -> usize {
+    rays.par_iter()
+        .with_min_len(64)
+        .filter(|r| !far.hit(r))
+        .filter(|r| {
+            let o: [f64; 3] = std::array::from_fn(|k| f64::from(r.origin[k]) - FAR_OFFSET[k]);
+            let t = near.trace(&Ray64::new(o, r.dir.map(f64::from)));
+            t.hit.is_none() && t.graze.is_none()
+        })
+        .count()
 }
 
 /// limitray's two diced structures.
@@ -775,6 +809,7 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
             incoherent_hits: h[1],
             leaks: leaks(e.engine, &leak_rays),
             leaks_far: 0,
+            far_misses_off_surface: None,
             samples: Samples {
                 build_s: e.build_s.clone(),
                 coherent,
@@ -784,7 +819,7 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         })
         .collect();
     drop(entries);
-    drop((exact, em, lr, coherent, incoherent));
+    drop((em, lr, coherent, incoherent));
 
     // The translated copy, for the far leak count (built after the first is freed).
     let mut far = mesh.clone();
@@ -805,9 +840,10 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         r.leaks_far = leaks(engine, &far_rays);
     }
     drop(far_em);
-    if let Some(r) = results.get_mut(5) {
+    if let (Some(r), Some((near_exact, _))) = (results.get_mut(5), &exact) {
         let (far_exact, _) = build_exact(&far, 1)?;
         r.leaks_far = leaks(&far_exact, &far_rays);
+        r.far_misses_off_surface = Some(far_misses_off_surface(&far_exact, near_exact, &far_rays));
     }
     Ok(BenchReport {
         faces: mesh.num_faces(),
@@ -818,4 +854,58 @@ fn bench_in_pool(mesh: &ControlMesh, opts: &BenchOptions) -> Result<BenchReport>
         embree_version: device.version(),
         engines: results,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `far_misses_off_surface` counts a far miss only where the same ray, moved back by
+    /// `FAR_OFFSET`, misses the mesh in place too: rays along `z` beside a box (at a `y`
+    /// beyond its limit surface) miss it far and in place, so all are counted; the same far
+    /// misses checked against the box scaled three times, which those rays meet, count none.
+    #[test]
+    fn far_misses_are_checked_in_place() {
+        let mesh = crate::mesh::shapes::rounded_box(2.0);
+        let mut far = mesh.clone();
+        let mut big = mesh.clone();
+        for (p, q) in far.positions.iter_mut().zip(&mut big.positions) {
+            for k in 0..3 {
+                p[k] += FAR_OFFSET[k];
+                q[k] *= 3.0;
+            }
+        }
+        let [lo, hi] = mesh.bounds();
+        // Whole and half units: the origins are `f32` far and in place, exactly.
+        let y = (hi[1] + 0.5).ceil();
+        let z = (lo[2] - 2.0).floor();
+        let rays: Vec<TestRay> = (0..16)
+            .map(|i| {
+                let x = lo[0] + (hi[0] - lo[0]) * (i as f64 + 0.5) / 16.0;
+                let x = (x * 8.0).round() / 8.0;
+                let o = [x, y, z];
+                TestRay {
+                    origin: std::array::from_fn(|k| (o[k] + FAR_OFFSET[k]) as f32),
+                    dir: [0.0, 0.0, 1.0],
+                }
+            })
+            .collect();
+        for r in &rays {
+            let o: [f64; 3] = std::array::from_fn(|k| f64::from(r.origin[k]) - FAR_OFFSET[k]);
+            assert!(o[1] == y && o[2] == z, "{o:?}");
+        }
+        let (far_exact, _) = build_exact(&far, 1).unwrap();
+        let (near_exact, _) = build_exact(&mesh, 1).unwrap();
+        let (big_exact, _) = build_exact(&big, 1).unwrap();
+        assert_eq!(
+            leaks(&far_exact, &rays),
+            rays.len(),
+            "the rays miss the far box"
+        );
+        assert_eq!(
+            far_misses_off_surface(&far_exact, &near_exact, &rays),
+            rays.len()
+        );
+        assert_eq!(far_misses_off_surface(&far_exact, &big_exact, &rays), 0);
+    }
 }
