@@ -309,6 +309,18 @@ impl Kept {
         self.grids.clear();
         self.along_t = Weights::default();
     }
+
+    /// Where single-crease patch `p`'s crease pieces are in `curves` (made the first time).
+    #[inline]
+    fn curve_index(&mut self, p: u32, sharpness: f64) -> usize {
+        match self.curves.iter().position(|(q, _)| *q == p) {
+            Some(i) => i,
+            None => {
+                self.curves.push((p, CreaseCurve::new(sharpness)));
+                self.curves.len() - 1
+            }
+        }
+    }
 }
 
 impl PatchTable {
@@ -430,20 +442,6 @@ impl PatchTable {
         }
         self.root_patch(face, k)
             .filter(|p| matches!(p.kind, PatchKind::BSpline { .. }))
-    }
-}
-
-impl Kept {
-    /// Where single-crease patch `p`'s crease pieces are in `curves` (made the first time).
-    #[inline]
-    fn curve_index(&mut self, p: u32, sharpness: f64) -> usize {
-        match self.curves.iter().position(|(q, _)| *q == p) {
-            Some(i) => i,
-            None => {
-                self.curves.push((p, CreaseCurve::new(sharpness)));
-                self.curves.len() - 1
-            }
-        }
     }
 }
 
