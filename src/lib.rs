@@ -17,6 +17,7 @@
 // Mesh code indexes several parallel arrays by the same element index; range loops say so.
 #![allow(clippy::needless_range_loop)]
 
+pub mod affinity;
 pub mod bvh;
 #[cfg(feature = "cli")]
 // Flattened clap argument groups carry their help on their own fields.

@@ -6,7 +6,8 @@ use crate::error::{Error, ErrorKind, Result};
 /// Most worker threads accepted (`--threads` of every command).
 pub const MAX_THREADS: usize = 1024;
 
-/// A rayon pool of `threads` workers (0: one per available core). More than
+/// A rayon pool of `threads` workers (0: one per available core), pinned one to each CPU
+/// where it takes every CPU the process may use ([`crate::affinity`]). More than
 /// [`MAX_THREADS`], or a failure to start them, is an error naming `--threads`.
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     if threads > MAX_THREADS {
@@ -15,8 +16,23 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
             format!("--threads {threads} is above the maximum of {MAX_THREADS}"),
         ));
     }
+    // The size rayon gives the pool (0: `RAYON_NUM_THREADS`, else one per available core).
+    let n = match threads {
+        0 => std::env::var("RAYON_NUM_THREADS")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+            .filter(|&n| n > 0)
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+        n => n,
+    };
+    let cpus = crate::affinity::plan(n);
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
+        .start_handler(move |i| {
+            if let Some(&cpu) = cpus.as_ref().and_then(|c| c.get(i)) {
+                crate::affinity::pin_current(cpu);
+            }
+        })
         .build()
         .map_err(|e| {
             Error::new(

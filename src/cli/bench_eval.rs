@@ -121,10 +121,7 @@ pub fn eval_bench_near(
     )?;
     let build_ms = ms_since(t0);
     let queries = eval_queries_near(mesh, &table, samples, seed, near)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| usage(format!("cannot start thread pool: {e}")))?;
+    let pool = crate::threads::pool(threads)?;
 
     let mut times = Vec::with_capacity(EVAL_REPS);
     let mut sum = None;
