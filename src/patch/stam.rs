@@ -116,16 +116,15 @@ fn walk(
     mut visit: impl FnMut(usize, usize),
 ) -> Option<()> {
     let topo = &level.topo;
+    let quad = |g: usize| <&[u32; 4]>::try_from(topo.face_vertices(g)).ok();
     let mut g = f;
+    let mut gv = quad(f)?;
+    // Where `v` is in the face walked (in the next face, found when its edge is crossed).
+    let mut j = gv.iter().position(|&x| x == v)?;
     for i in 0..count {
-        if i > 0 && g == f {
+        if (i > 0 && g == f) || level.face_hole[g] {
             return None;
         }
-        let gv = topo.face_vertices(g);
-        if gv.len() != 4 || level.face_hole[g] {
-            return None;
-        }
-        let j = gv.iter().position(|&x| x == v)?;
         visit(g, j);
         let e = topo.face_edge_list(g)[(j + 3) % 4];
         let faces = topo.edge_face_list(e);
@@ -138,12 +137,12 @@ fn walk(
             faces[0]
         } as usize;
         // The next face runs the shared edge the other way: v first, then gv[j + 3].
-        let nv = topo.face_vertices(next);
+        let nv = quad(next)?;
         let k = nv.iter().position(|&x| x == v)?;
-        if nv.len() != 4 || nv[(k + 1) % 4] != gv[(j + 3) % 4] {
+        if nv[(k + 1) % 4] != gv[(j + 3) % 4] {
             return None;
         }
-        g = next;
+        (g, gv, j) = (next, nv, k);
     }
     (g == f).then_some(())
 }
@@ -173,7 +172,9 @@ pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
     let topo = &level.topo;
     let fv = topo.face_vertices(f);
     let canonical = &basis_ref(n).faces;
-    let mut out = vec![u32::MAX; 2 * n + 8];
+    // On the stack (two vectors a call took a tenth of its time).
+    let mut all = [u32::MAX; 2 * MAX_VALENCE + 8];
+    let out = &mut all[..2 * n + 8];
     out[0] = ev;
     // Faces walked so far; whether every vertex went to a free slot or to its own; whether
     // every edge of the faces walked is smooth.
@@ -208,17 +209,19 @@ pub fn gather(level: &Level, f: usize) -> Option<(usize, Vec<u32>)> {
         return None;
     }
     // Distinct vertices (a vertex in two slots is another configuration).
-    let mut sorted = out.clone();
+    let mut copy = all;
+    let sorted = &mut copy[..2 * n + 8];
     sorted.sort_unstable();
     if sorted.windows(2).any(|w| w[0] == w[1]) {
         return None;
     }
+    let out = &all[..2 * n + 8];
     // No sharpness on the walked faces' edges (checked as they were walked) or the gathered
     // vertices.
     let smooth_verts = out
         .iter()
         .all(|&v| level.vertex_sharpness[v as usize] == 0.0);
-    (smooth_edges && smooth_verts).then_some((c, out))
+    (smooth_edges && smooth_verts).then(|| (c, out.to_vec()))
 }
 
 /// A face of the configuration as positions in the gathered vertices, from the corner walked.
