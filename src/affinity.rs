@@ -10,18 +10,27 @@
 //! the same delay.
 //!
 //! Only where it cannot crowd anything: Linux only, a pool of two threads or more whose size
-//! is the number of CPUs in the process's affinity mask (a smaller pool, or a larger one, is
-//! left to the scheduler). `LIMITRAY_PIN_THREADS=0` turns it off.
+//! is the number of CPUs the process may run on (its main thread's affinity mask; a smaller
+//! pool, or a larger one, is left to the scheduler). `LIMITRAY_PIN_THREADS=0` turns it off. A
+//! thread inherits its creator's mask, so the pools (and their workers) that a pinned worker
+//! starts are given the process's CPUs back ([`spawn_mask`]).
 
-/// The CPUs the workers of a pool of `threads` are pinned to, in worker order: the process's
-/// allowed CPUs when there are exactly `threads` of them (and `threads` ≥ 2) and pinning is
-/// not turned off, else none.
-pub fn plan(threads: usize) -> Option<Vec<usize>> {
-    let setting = std::env::var_os("LIMITRAY_PIN_THREADS");
-    decide(threads, setting.as_deref(), allowed())
+use std::cell::Cell;
+
+thread_local! {
+    /// Whether this thread was pinned by [`pin_current`].
+    static PINNED: Cell<bool> = const { Cell::new(false) };
 }
 
-/// [`plan`] given the variable's value and the allowed CPUs.
+/// The CPUs the workers of a pool of `threads` are pinned to, in worker order: the process's
+/// CPUs when there are exactly `threads` of them (and `threads` ≥ 2) and pinning is not
+/// turned off, else none.
+pub fn plan(threads: usize) -> Option<Vec<usize>> {
+    let setting = std::env::var_os("LIMITRAY_PIN_THREADS");
+    decide(threads, setting.as_deref(), process_cpus())
+}
+
+/// [`plan`] given the variable's value and the process's CPUs.
 fn decide(
     threads: usize,
     setting: Option<&std::ffi::OsStr>,
@@ -33,15 +42,26 @@ fn decide(
     cpus.filter(|c| c.len() == threads)
 }
 
-/// The CPUs this thread may run on (its affinity mask), in increasing order; `None` off
-/// Linux or where the kernel does not say.
+/// The CPUs the process may run on (its main thread's affinity mask), in increasing order;
+/// `None` off Linux or where the kernel does not say.
+pub fn process_cpus() -> Option<Vec<usize>> {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: `getpid` cannot fail; the process id is its main thread's id.
+        mask_of(unsafe { libc::getpid() })
+    }
+    #[cfg(not(target_os = "linux"))]
+    None
+}
+
+/// The affinity mask of thread `tid` (0: the calling thread), in increasing order.
 #[cfg(target_os = "linux")]
-fn allowed() -> Option<Vec<usize>> {
+fn mask_of(tid: libc::pid_t) -> Option<Vec<usize>> {
     // SAFETY: `cpu_set_t` is plain bits (zero is the empty set); the kernel writes at most
     // its size, which is passed.
     let set = unsafe {
         let mut set: libc::cpu_set_t = std::mem::zeroed();
-        if libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut set) != 0 {
+        if libc::sched_getaffinity(tid, std::mem::size_of::<libc::cpu_set_t>(), &mut set) != 0 {
             return None;
         }
         set
@@ -53,34 +73,58 @@ fn allowed() -> Option<Vec<usize>> {
     (!cpus.is_empty()).then_some(cpus)
 }
 
-#[cfg(not(target_os = "linux"))]
-fn allowed() -> Option<Vec<usize>> {
-    None
-}
-
-/// Pins the calling thread to `cpu` (a worker's start handler). Only a request: where the
-/// kernel refuses, the thread runs where the scheduler puts it, as unpinned.
-pub fn pin_current(cpu: usize) {
+/// Restricts the calling thread to `cpus`. Only a request: where the kernel refuses (or off
+/// Linux), the thread runs where the scheduler puts it.
+fn set_current(cpus: &[usize]) {
     #[cfg(target_os = "linux")]
     {
-        if cpu >= libc::CPU_SETSIZE as usize {
-            return;
-        }
-        // SAFETY: as in `allowed`; `cpu` is below `CPU_SETSIZE`.
+        // SAFETY: as in `mask_of`; every CPU set is below `CPU_SETSIZE`.
         unsafe {
             let mut set: libc::cpu_set_t = std::mem::zeroed();
-            libc::CPU_SET(cpu, &mut set);
+            for &cpu in cpus.iter().filter(|&&c| c < libc::CPU_SETSIZE as usize) {
+                libc::CPU_SET(cpu, &mut set);
+            }
             libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
         }
     }
     #[cfg(not(target_os = "linux"))]
-    let _ = cpu;
+    let _ = cpus;
 }
 
-/// The calling thread's CPUs (its affinity mask), for tests; `None` as [`plan`] has it.
-#[cfg(test)]
+/// Pins the calling thread to `cpu` (a worker's start handler).
+pub fn pin_current(cpu: usize) {
+    set_current(&[cpu]);
+    PINNED.with(|p| p.set(true));
+}
+
+/// What a thread started from this one should run on instead of inheriting this thread's
+/// mask: the process's CPUs where this thread is a pinned worker, else `None` (inherit).
+/// Taken by the pool builders before they start their workers, applied by
+/// [`apply_spawn_mask`] in each worker's start handler.
+pub fn spawn_mask() -> Option<Vec<usize>> {
+    if PINNED.with(|p| p.get()) {
+        process_cpus()
+    } else {
+        None
+    }
+}
+
+/// Applies [`spawn_mask`]'s answer (taken in the creating thread) to the calling thread.
+pub fn apply_spawn_mask(mask: &Option<Vec<usize>>) {
+    if let Some(cpus) = mask {
+        set_current(cpus);
+    }
+}
+
+/// The calling thread's CPUs (its affinity mask), for tests.
+#[cfg(all(test, target_os = "linux"))]
 pub(crate) fn current() -> Option<Vec<usize>> {
-    allowed()
+    mask_of(0)
+}
+
+#[cfg(all(test, not(target_os = "linux")))]
+pub(crate) fn current() -> Option<Vec<usize>> {
+    None
 }
 
 #[cfg(test)]
@@ -100,12 +144,13 @@ mod tests {
         assert_eq!(super::decide(2, None, None), None);
     }
 
-    /// A pool of every allowed CPU pins worker `i` to the `i`-th of them (each worker then
-    /// reports that one CPU as its mask), and the thread that made the pool keeps its mask;
-    /// any other size pins nothing.
+    /// A pool of every CPU of the process pins worker `i` to the `i`-th of them (each worker
+    /// then reports that one CPU as its mask), and the thread that made the pool keeps its
+    /// mask; any other size pins nothing. Pools and threads a pinned worker starts get the
+    /// process's CPUs back, not its one (as `bvh::mesh::build_deep`'s pool does).
     #[test]
     fn pools_of_every_cpu_pin_one_worker_to_each() {
-        let Some(cpus) = super::current() else {
+        let Some(cpus) = super::process_cpus() else {
             println!("no affinity mask on this platform: nothing pinned");
             assert_eq!(super::plan(2), None);
             return;
@@ -114,7 +159,7 @@ mod tests {
         assert_eq!(super::plan(n + 1), None);
         assert_eq!(super::plan(1), None);
         if n < 2 {
-            println!("one allowed CPU: pools of one thread are never pinned");
+            println!("one CPU: pools of one thread are never pinned");
             assert_eq!(super::plan(n), None);
             return;
         }
@@ -128,5 +173,20 @@ mod tests {
         assert_eq!(sum, 100_000 * 99_999 / 2);
         // The calling thread is not a worker: its mask is untouched.
         assert_eq!(super::current().as_deref(), Some(&cpus[..]));
+        // From a pinned worker: a pool of fewer threads, and the deep build's pool.
+        let (small, deep) = pool.install(|| {
+            let small = crate::threads::pool(n - 1).unwrap();
+            let small = small.broadcast(|_| super::current());
+            let deep = crate::bvh::mesh::build_deep(|| rayon::broadcast(|_| super::current()));
+            (small, deep)
+        });
+        assert!(
+            small.iter().all(|m| m.as_deref() == Some(&cpus[..])),
+            "{small:?}"
+        );
+        assert!(
+            deep.iter().all(|m| m.as_deref() == Some(&cpus[..])),
+            "{deep:?}"
+        );
     }
 }

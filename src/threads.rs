@@ -26,12 +26,13 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
         n => n,
     };
     let cpus = crate::affinity::plan(n);
+    // Made from a pinned worker, unpinned workers get the process's CPUs, not its one.
+    let inherit = crate::affinity::spawn_mask();
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .start_handler(move |i| {
-            if let Some(&cpu) = cpus.as_ref().and_then(|c| c.get(i)) {
-                crate::affinity::pin_current(cpu);
-            }
+        .start_handler(move |i| match cpus.as_ref().and_then(|c| c.get(i)) {
+            Some(&cpu) => crate::affinity::pin_current(cpu),
+            None => crate::affinity::apply_spawn_mask(&inherit),
         })
         .build()
         .map_err(|e| {

@@ -322,8 +322,11 @@ impl super::ray::Intersect for MeshBvh {
 /// levels deep. A pool of its own, rather than one spawned thread, also keeps builds that are
 /// started from rayon workers (several meshes built in parallel) from waiting on each other.
 pub(crate) fn build_deep<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    // Started from a pinned worker, its threads get the process's CPUs, not that worker's one.
+    let inherit = crate::affinity::spawn_mask();
     match rayon::ThreadPoolBuilder::new()
         .num_threads(rayon::current_num_threads())
+        .start_handler(move |_| crate::affinity::apply_spawn_mask(&inherit))
         .stack_size(1 << 30)
         .thread_name(|i| format!("limitray-bvh-{i}"))
         .build()
