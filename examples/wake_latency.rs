@@ -8,8 +8,8 @@
 //!     cargo run --release --example wake_latency
 //!
 //! On this project's build machines (2 vCPUs, a guest kernel that packs woken threads onto
-//! busy vCPUs) the plain pool's worker started after 1.5–3 ms once the process had idled 2 ms
-//! or more, the pinned pool's after 40–90 µs.
+//! busy vCPUs) the plain pool's worker started after 1.2–2.5 ms (medians) once the process had
+//! idled 2 ms or more, the pinned pool's after 30–100 µs.
 
 use std::time::{Duration, Instant};
 

@@ -4,10 +4,10 @@
 //! Why: rayon's idle workers sleep within microseconds, and a sleeping worker woken for the
 //! next parallel stage is placed by the kernel's scheduler. On a virtual machine that packs
 //! woken threads onto busy vCPUs (measured here: a Firecracker guest booted with
-//! `sched_vcpu_pack`), the woken worker queued behind the thread that woke it for 1.5–3 ms
-//! after the process had idled 2 ms or more, where a parallel stage of a build lasts 0.1–10
-//! ms. Pinned, it woke in 40–90 µs. Embree's TBB workers spin rather than sleep, which hides
-//! the same delay.
+//! `sched_vcpu_pack`), the woken worker queued behind the thread that woke it for 1.2–2.5 ms
+//! (medians; up to 3 ms) after the process had idled 2 ms or more, where a parallel stage of
+//! a build lasts 0.1–10 ms. Pinned, it woke in 30–100 µs (`examples/wake_latency.rs`).
+//! Embree's TBB workers spin rather than sleep, which hides the same delay.
 //!
 //! Only where it cannot crowd anything: Linux only, a pool of two threads or more whose size
 //! is the number of CPUs the process may run on (its main thread's affinity mask; a smaller
