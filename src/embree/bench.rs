@@ -529,10 +529,11 @@ fn leaks(engine: &dyn Engine, rays: &[TestRay]) -> usize {
 /// How many of `rays` `far` (the reference intersector of the mesh at [`FAR_OFFSET`]) misses
 /// (its far leaks), and how many of those miss the limit surface itself: the ray moved back
 /// by [`FAR_OFFSET`] is a certain miss (no hit, no graze) of `near`, the same mesh in place
-/// (each ray traced far once, and in place only where it missed). The move is exact (the offset is a
-/// whole number, the origin an `f32`: their difference is an `f32` too), and the two surfaces
-/// differ only by the rounding of the far control points (about 3e-11 at this offset), far
-/// below any tolerance here. A far miss that `near` hits is a leak that distance caused.
+/// (each ray traced far once, and in place only where it missed). The move is exact (the
+/// offset is a whole number, the origin an `f32`: their difference is an `f32` too), and the
+/// two surfaces differ only by the rounding of the far control points (about 3e-11 at this
+/// offset), far below any tolerance here. A far miss that `near` hits is a leak that distance
+/// caused.
 pub fn far_misses_off_surface(
     far: &ExactTracer,
     near: &ExactTracer,
