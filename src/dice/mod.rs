@@ -618,6 +618,10 @@ impl Prepared<'_> {
         jobs.into_par_iter().try_for_each_init(
             || (LatticeScratch::default(), Vec::new(), Vec::new()),
             |(scratch, group_normals, coords), (runs, p, nrm, prm, cds)| {
+                if displacer.is_none() && !with_normals && nrm.is_empty() && prm.is_empty() {
+                    // Positions alone (the grid core's lean dicing without normals).
+                    return positions_alone(table, runs, p, scratch, coords);
+                }
                 // The group's points' parameters, from their runs.
                 coords.clear();
                 coords.extend(
@@ -850,6 +854,60 @@ struct Scratch {
     sides: Sides,
     /// Pattern indices to vertex indices.
     map: Vec<u32>,
+}
+
+/// The positions alone of the shared points of `runs` into `out` (one slot a point, in run
+/// order), the bits [`Prepared::eval_shared`]'s general path gives: a run whose points lie in
+/// one domain that is one B-spline patch is summed straight into its slots
+/// ([`PatchTable::eval_domain_points_p`]: its control points gathered once, no lookup, check
+/// or record per point); any other run by the general evaluation, with its parameters
+/// (`coords`, scratch) and leaves' parts (`scratch`) of its own.
+fn positions_alone(
+    table: &PatchTable,
+    runs: &[Run],
+    out: &mut [[f32; 3]],
+    scratch: &mut LatticeScratch,
+    coords: &mut Vec<FaceCoord>,
+) -> Result<()> {
+    let mut first = 0;
+    for run in runs {
+        let slots = &mut out[first..first + run.len()];
+        first += run.len();
+        let mut i = 0;
+        let mut outside = None;
+        let mut put = |q: [f64; 3]| {
+            if outside.is_none() && !crate::numeric::in_range(q) {
+                outside = Some((i, q));
+            }
+            slots[i] = q.map(|x| x as f32);
+            i += 1;
+        };
+        let uv = (0..run.len()).map(|i| {
+            let c = run.at(i);
+            [c.u, c.v]
+        });
+        if run
+            .one_domain()
+            .is_some_and(|d| table.eval_domain_points_p(d, uv, &mut put))
+        {
+            if let Some((i, q)) = outside {
+                in_range(run.at(i), q)?;
+            }
+            continue;
+        }
+        coords.clear();
+        coords.extend((0..run.len()).map(|i| run.at(i)));
+        scratch.points.clear();
+        scratch.kept.clear();
+        if !table.eval_points_p(coords, &mut scratch.kept, &mut scratch.points)? {
+            table.eval_d1_points(coords, &mut scratch.kept, &mut scratch.points)?;
+        }
+        for ((slot, q), &c) in slots.iter_mut().zip(&scratch.points).zip(coords.iter()) {
+            in_range(c, q.p)?;
+            *slot = q.p.map(|x| x as f32);
+        }
+    }
+    Ok(())
 }
 
 /// A run of evaluated points (a domain's lattice, or shared points) and their unit normals.

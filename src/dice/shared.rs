@@ -45,6 +45,20 @@ impl Run {
         }
     }
 
+    /// The one domain `(face, k)` all its points lie in: a quad's (every run of a quad), or
+    /// the single point's; `None` for a run along an n-gon's edge (it crosses from one
+    /// sub-face into the next) .
+    #[inline]
+    pub fn one_domain(&self) -> Option<(u32, u32)> {
+        match self.kind {
+            _ if self.n == 4 => Some((self.face, 0)),
+            RunKind::Vertex { m } => Some((self.face, m)),
+            RunKind::Centre => Some((self.face, 0)),
+            RunKind::Spoke { k, .. } => Some((self.face, k)),
+            RunKind::Edge { .. } => None,
+        }
+    }
+
     /// Where its `i`-th point lies, in its owner's domains.
     #[inline]
     pub fn at(&self, i: usize) -> FaceCoord {
@@ -184,12 +198,18 @@ mod tests {
     use crate::mesh::{generate, shapes, Options};
 
     /// The runs number the points in order without gaps, [`Shared::at`] finds each point's
-    /// run, every vertex's point is a corner of its owner's domain, and every edge's and
-    /// spoke's samples lie on their side, evenly spaced, on meshes with n-gons and holes, at
-    /// rates 1 (no inner samples) to 7.
+    /// run, a run's one domain ([`Run::one_domain`]) is its points', every vertex's point is a
+    /// corner of its owner's domain, and every edge's and spoke's samples lie on their side,
+    /// evenly spaced, on meshes with n-gons (triangles) and holes, at rates 1 (no inner
+    /// samples) to 7.
     #[test]
     fn runs_number_the_points_and_lie_on_their_sides() {
-        let mut meshes = vec![shapes::gear(7), generate::star(5, 3)];
+        let mut meshes = vec![
+            shapes::gear(7),
+            generate::star(5, 3),
+            shapes::spindle(5),
+            shapes::triangulated(&generate::grid(3)),
+        ];
         let mut holed = generate::grid(4);
         holed.holes = vec![5];
         meshes.push(holed);
@@ -209,9 +229,24 @@ mod tests {
                     .collect();
                 assert_eq!(all.len(), sh.len);
                 let mut next = 0;
+                let mut crossing = 0;
                 for r in &sh.runs {
                     assert_eq!(r.first as usize, next);
                     next += r.len();
+                    // A run's one domain is every one of its points' (and only an n-gon's
+                    // edge has none: its points may lie in two sub-faces).
+                    let domains: Vec<(u32, u32)> =
+                        (0..r.len()).map(|i| (r.at(i).face, r.at(i).k)).collect();
+                    match r.one_domain() {
+                        Some(d) => assert!(domains.iter().all(|&x| x == d), "{r:?}"),
+                        None => {
+                            assert!(r.n != 4 && matches!(r.kind, RunKind::Edge { .. }));
+                            crossing += usize::from(domains.iter().any(|&x| x != domains[0]));
+                        }
+                    }
+                }
+                if (0..mesh.num_faces()).any(|f| mesh.face_size(f) != 4) && rate >= 3 {
+                    assert!(crossing > 0, "no run crosses sub-faces");
                 }
                 for (i, &p) in all.iter().enumerate() {
                     assert_eq!(sh.at(i as u32), p, "point {i}");
@@ -234,7 +269,10 @@ mod tests {
                     for p in pts {
                         let on_side = [p.u, p.v].iter().any(|&x| x == 0.0 || x == 1.0);
                         let corner = [p.u, p.v].iter().all(|&x| x == 0.0 || x == 1.0);
-                        assert!(on_side && !corner, "edge {e}: {p:?}");
+                        // An n-gon's edge midpoint is its sub-face's corner (1, 0).
+                        let midpoint =
+                            topo.face_size(p.face as usize) != 4 && (p.u, p.v) == (1.0, 0.0);
+                        assert!(on_side && (!corner || midpoint), "edge {e}: {p:?}");
                     }
                 }
                 for (slot, &first) in sh.spoke_first.iter().enumerate() {

@@ -416,6 +416,24 @@ impl PatchTable {
         Ok(true)
     }
 
+    /// The positions of points `uv` of domain `(face, k)` where the domain is one B-spline
+    /// patch (`false`, with nothing evaluated, where it is not, or is out of range): the bits
+    /// [`Self::eval_points_p`] gives them, its control points gathered once, rows contracted
+    /// once for points of one `u`, with no lookup and no check per point (the caller's points
+    /// lie in the domain: a shared run of dicing).
+    pub(crate) fn eval_domain_points_p(
+        &self,
+        (face, k): (u32, u32),
+        uv: impl ExactSizeIterator<Item = [f64; 2]> + Clone,
+        out: impl FnMut([f64; 3]),
+    ) -> bool {
+        let Some(patch) = self.bspline_root(face as usize, k as usize) else {
+            return false;
+        };
+        bspline::eval_points_p(&self.grid(patch), uv, out);
+        true
+    }
+
     /// The B-spline patch that is the whole of the one domain all of `coords` lie in, if
     /// they do and it is one.
     fn one_bspline_domain(&self, coords: &[FaceCoord]) -> Option<&super::Patch> {
