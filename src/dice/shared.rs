@@ -45,9 +45,9 @@ impl Run {
         }
     }
 
-    /// The one domain `(face, k)` all its points lie in: a quad's (every run of a quad), or
-    /// the single point's; `None` for a run along an n-gon's edge (it crosses from one
-    /// sub-face into the next) .
+    /// The one domain `(face, k)` all its points lie in: a quad's (every run of a quad), the
+    /// single point's (a corner, a centre), a spoke's sub-face; `None` for a run along an
+    /// n-gon's edge (it crosses from one sub-face into the next).
     #[inline]
     pub fn one_domain(&self) -> Option<(u32, u32)> {
         match self.kind {

@@ -395,12 +395,8 @@ impl PatchTable {
             self.check(at)?;
         }
         let one = coords.iter().all(|c| (c.face, c.k) == (face, k));
-        if let Some(patch) = one
-            .then(|| self.bspline_root(face as usize, k as usize))
-            .flatten()
-        {
-            let uv = coords.iter().map(|c| [c.u, c.v]);
-            bspline::eval_points_p(&self.grid(patch), uv, |p| out.push(alone(p)));
+        let uv = coords.iter().map(|c| [c.u, c.v]);
+        if one && self.eval_domain_points_p((face, k), uv, |p| out.push(alone(p))) {
             return Ok(true);
         }
         let start = out.len();
@@ -576,15 +572,17 @@ mod tests {
         );
     }
 
-    /// `eval_d1_points` equals `eval_d1` bit for bit (signs of zeros included) on runs along
-    /// each domain's sides and diagonal and at its corners, as shared points come (the parts
-    /// kept from run to run, and from domain to domain where they are not cleared), on meshes
-    /// with B-spline roots (both of their paths) and single-crease, Stam and end-cap leaves;
-    /// holes are errors for both.
+    /// `eval_d1_points` equals `eval_d1` bit for bit (signs of zeros included), and the
+    /// positions alone of `eval_points_p` and `eval_domain_points_p` equal its positions, on
+    /// runs along each domain's sides and diagonal and at its corners, as shared points come
+    /// (the parts kept from run to run, and from domain to domain where they are not cleared),
+    /// on meshes with B-spline roots (both of their paths) and single-crease, Stam and end-cap
+    /// leaves; holes are errors for both.
     #[test]
     fn points_are_eval_bit_for_bit() {
         let bits = |p: super::PointD1| [p.p, p.du, p.dv].map(|v| v.map(f64::to_bits));
         let mut paths = [0usize; 3];
+        let mut domain_runs = 0;
         for table in tables() {
             let mut kept = super::Kept::default();
             for f in 0..table.num_faces() {
@@ -626,6 +624,30 @@ mod tests {
                         let same_u = run.len() > 1 && run.iter().all(|c| c.u == run[0].u);
                         let one_domain =
                             run.iter().all(|c| (c.face, c.k) == (run[0].face, run[0].k));
+                        // Positions alone, from `eval_points_p` and, for a run in one domain,
+                        // from `eval_domain_points_p`: `eval_d1`'s position bits.
+                        let want: Result<Vec<_>, _> = run
+                            .iter()
+                            .map(|&at| table.eval_d1(at).map(|p| p.p.map(f64::to_bits)))
+                            .collect();
+                        if let Ok(want) = want {
+                            let mut got = Vec::new();
+                            if let Ok(true) = table.eval_points_p(run, &mut kept, &mut got) {
+                                let got: Vec<_> =
+                                    got.iter().map(|p| p.p.map(f64::to_bits)).collect();
+                                assert_eq!(got, want, "positions alone: ({f}, {k}) on {run:?}");
+                            }
+                            let mut alone = Vec::new();
+                            let uv = run.iter().map(|c| [c.u, c.v]);
+                            if one_domain
+                                && table.eval_domain_points_p((f32_, k32), uv, |p| {
+                                    alone.push(p.map(f64::to_bits))
+                                })
+                            {
+                                assert_eq!(alone, want, "one domain: ({f}, {k}) on {run:?}");
+                                domain_runs += 1;
+                            }
+                        }
                         let root = table.bspline_root(run[0].face as usize, run[0].k as usize);
                         paths[match root.filter(|_| one_domain) {
                             None => 0,
@@ -640,6 +662,7 @@ mod tests {
             }
         }
         assert!(paths.iter().all(|&n| n > 0), "runs by path: {paths:?}");
+        assert!(domain_runs > 0);
     }
 
     /// A hole at a lattice point leaves the whole domain to point-by-point evaluation (which
