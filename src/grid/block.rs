@@ -203,9 +203,13 @@ pub fn plane_boxes(b: &Block, coords: &[f32], quadrants: &mut [Box4]) -> Box4 {
                 row_lo[y] = std::array::from_fn(|w| min(min(p[2 * w], p[2 * w + 1]), p[2 * w + 2]));
                 row_hi[y] = std::array::from_fn(|w| max(max(p[2 * w], p[2 * w + 1]), p[2 * w + 2]));
             } else {
-                let p = |x: usize| row[x.min(cols)];
-                row_lo[y] = std::array::from_fn(|w| min(min(p(2 * w), p(2 * w + 1)), p(2 * w + 2)));
-                row_hi[y] = std::array::from_fn(|w| max(max(p(2 * w), p(2 * w + 1)), p(2 * w + 2)));
+                // The row's windows alone (the rest of `row_lo[y]` is never read); only the
+                // last window's third column may lie past the block.
+                for w in 0..wc {
+                    let (a, b, c) = (row[2 * w], row[2 * w + 1], row[(2 * w + 2).min(cols)]);
+                    row_lo[y][w] = min(min(a, b), c);
+                    row_hi[y][w] = max(max(a, b), c);
+                }
             }
         }
         for wy in 0..wr {
