@@ -116,6 +116,62 @@ fn vertices_lie_on_the_limit_surface() {
     }
 }
 
+/// Every triangle's corners are the limit points at the parameters it records for them in its
+/// own domain: a side's shared points stand where the domain's pattern puts them (in order
+/// along the side, whichever way the edge runs), in every domain that holds them. The
+/// recorded `(u, v)` are `f32` (at most 2⁻²⁵ off in the unit square), so a corner may differ
+/// from the point at them by that times the surface's parametric speed, far below 10⁻⁵ of
+/// the mesh's size; a corner misplaced by one segment along its side is off by about the
+/// face's size over the rate (about 1/24 of the size here).
+#[test]
+fn triangle_corners_lie_at_their_recorded_parameters() {
+    let mut meshes = vec![("grid 6".to_string(), limitray::mesh::generate::grid(6))];
+    if let Some(models) = common::shared_models() {
+        for name in [
+            "catmark_car",
+            "catmark_pyramid_creases2",
+            "catmark_tent",
+            "catmark_pole8",
+        ] {
+            let path = models.join(format!("opensubdiv/{name}.obj"));
+            meshes.push((name.to_string(), read_obj(&path).unwrap()));
+        }
+    }
+    for (name, mesh) in &meshes {
+        for rate in [1, 3, 4] {
+            let (table, d) = diced(mesh, DiceRate::Uniform(rate));
+            let (lo, hi) = d.positions.iter().fold(
+                ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+                |(lo, hi), p| {
+                    (
+                        std::array::from_fn(|a| lo[a].min(p[a] as f64)),
+                        std::array::from_fn(|a| hi[a].max(p[a] as f64)),
+                    )
+                },
+            );
+            let size = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+            for (t, (tri, info)) in d.triangles.iter().zip(&d.tri_info).enumerate() {
+                for (c, &v) in tri.iter().enumerate() {
+                    let [u, w] = info.uv[c].map(f64::from);
+                    let at = limitray::coord::FaceCoord::new(info.face, info.k, u, w);
+                    let s = table.eval(at).unwrap();
+                    let p = d.positions[v as usize];
+                    let off = (0..3)
+                        .map(|a| (p[a] as f64 - s.p[a]).abs())
+                        .fold(0.0, f64::max);
+                    assert!(
+                        off <= 1e-5 * size,
+                        "{name} at rate {rate}: triangle {t} corner {c} is {off} from its \
+                         parameters ({}, {}, {u}, {w})",
+                        info.face,
+                        info.k
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// Sides of n-gons: an edge between a quad and a pentagon gets an even rate on both sides;
 /// the mesh stays closed.
 #[test]

@@ -1017,6 +1017,23 @@ impl DomainCtx<'_> {
         });
     }
 
+    /// The shared indices of the first `r` of the `r + 1` points of face edge `m` of face
+    /// `f` ([`Self::face_edge_points`]' without the last and their seam flags), pushed onto
+    /// `out`.
+    fn face_edge_ring(&self, f: usize, m: usize, out: &mut Vec<u32>) {
+        let topo = &self.level.topo;
+        let e = topo.face_edge(f, m) as usize;
+        let va = topo.face_vertices(f)[m] as usize;
+        let r = self.rates.edge[e];
+        let first = self.shared.edge_first[e];
+        out.push(self.shared.vertex[va]);
+        if topo.edge_verts[e][0] as usize == va {
+            out.extend(first..first + (r - 1));
+        } else {
+            out.extend((first..first + (r - 1)).rev());
+        }
+    }
+
     /// Spoke `k` of n-gon `f`: from the midpoint of edge `k` to the centre, into `pts`
     /// (cleared first; `edge` is scratch space).
     fn spoke_points(
@@ -1079,6 +1096,45 @@ impl DomainCtx<'_> {
             FaceCoord::new(f as u32, k as u32, u, v)
         };
         scratch.finish(self.table, at, put, self.normals)?;
+        Ok(true)
+    }
+
+    /// The positions alone of the interior points of domain `(f, k)` (the lattice of `pat`)
+    /// into `slots` where the surface is undisplaced and the domain one B-spline patch
+    /// ([`PatchTable::eval_domain_lattice_p`]: the bits [`Self::lattice`] rounds, without a
+    /// record or a normal per point; a point out of the numeric range is the same error);
+    /// `false`, with nothing written, otherwise.
+    fn lattice_positions(
+        &self,
+        f: usize,
+        k: usize,
+        pat: &Pattern,
+        slots: &mut [[f32; 3]],
+    ) -> Result<bool> {
+        if self.displace.is_some() || pat.interior.is_empty() {
+            return Ok(false);
+        }
+        let nu = pat.rates[0].max(pat.rates[2]);
+        let nv = pat.rates[1].max(pat.rates[3]);
+        debug_assert_eq!(slots.len(), ((nu - 1) * (nv - 1)) as usize);
+        let (mut i, mut outside) = (0, None);
+        let put = |q: [f64; 3]| {
+            if outside.is_none() && !crate::numeric::in_range(q) {
+                outside = Some((i, q));
+            }
+            slots[i] = q.map(|x| x as f32);
+            i += 1;
+        };
+        if !self
+            .table
+            .eval_domain_lattice_p((f as u32, k as u32), nu, nv, put)
+        {
+            return Ok(false);
+        }
+        if let Some((i, q)) = outside {
+            let [u, v] = pat.interior[i];
+            in_range(FaceCoord::new(f as u32, k as u32, u, v), q)?;
+        }
         Ok(true)
     }
 
@@ -1176,30 +1232,44 @@ impl DomainCtx<'_> {
             sides,
             map,
         } = scratch;
-        self.sides(f, k, sides);
-        let sides = sides.get();
-        let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
-        let pat = patterns.entry(rates).or_insert_with(|| pattern(rates));
-        let ring = pat.ring_len();
-        // Map pattern indices to vertex indices.
+        // Map pattern indices to vertex indices: the ring's first.
         map.clear();
-        map.reserve(ring + pat.interior.len());
         let mut own = 0;
-        for (s, side) in sides.iter().enumerate() {
-            for (j, &sp) in side[..side.len() - 1].iter().enumerate() {
-                if self.foreign_seam(f, k, sp) {
-                    // A seam vertex owned by another domain: copy its position, own normal.
-                    let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
-                    let mut q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
-                    q.p = self.shared_positions[sp.index as usize];
-                    map.push(LOCAL | own as u32);
-                    out.put(own, q);
-                    own += 1;
-                } else {
-                    map.push(sp.index);
+        let rates = match self.seamless_quad_rates(f) {
+            // A quad with no seam on its sides: its ring is its edges' shared points, in
+            // order, with no copy (no side points listed to find none).
+            Some(rates) => {
+                for m in 0..4 {
+                    self.face_edge_ring(f, m, map);
                 }
+                rates
             }
-        }
+            None => {
+                self.sides(f, k, sides);
+                let sides = sides.get();
+                let rates: [u32; 4] = std::array::from_fn(|s| sides[s].len() as u32 - 1);
+                for (s, side) in sides.iter().enumerate() {
+                    for (j, &sp) in side[..side.len() - 1].iter().enumerate() {
+                        if self.foreign_seam(f, k, sp) {
+                            // A seam vertex owned by another domain: copy its position, own
+                            // normal.
+                            let [u, v] = side_uv(s, j as f64 / rates[s] as f64);
+                            let mut q =
+                                eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
+                            q.p = self.shared_positions[sp.index as usize];
+                            map.push(LOCAL | own as u32);
+                            out.put(own, q);
+                            own += 1;
+                        } else {
+                            map.push(sp.index);
+                        }
+                    }
+                }
+                rates
+            }
+        };
+        let pat = patterns.entry(rates).or_insert_with(|| pattern(rates));
+        debug_assert_eq!(map.len(), pat.ring_len());
         let first = own;
         map.extend((0..pat.interior.len()).map(|i| LOCAL | (first + i) as u32));
         let base = out.base;
@@ -1213,7 +1283,13 @@ impl DomainCtx<'_> {
         for (slot, &i) in out.frame.iter_mut().zip(&pat.grid_frame) {
             *slot = global(map[i as usize]);
         }
-        if !self.lattice(f, k, pat, lattice, |i, q| out.put(first + i, q))? {
+        // Positions alone (no normals, no parameters) summed straight into their slots where
+        // the domain is one B-spline patch; else the lattice's records, else point by point.
+        let interior = first..first + pat.interior.len();
+        let alone = !self.normals
+            && out.params.is_empty()
+            && self.lattice_positions(f, k, pat, &mut out.positions[interior])?;
+        if !alone && !self.lattice(f, k, pat, lattice, |i, q| out.put(first + i, q))? {
             for (i, &[u, v]) in pat.interior.iter().enumerate() {
                 let q = eval_point(self.table, self.displace, f as u32, k as u32, u, v)?;
                 out.put(first + i, q);

@@ -430,6 +430,26 @@ impl PatchTable {
         true
     }
 
+    /// The positions of the interior lattice points of domain `(face, k)` (as
+    /// [`Self::eval_domain_lattice`] orders them) where the domain is one B-spline patch
+    /// (`false`, with nothing evaluated, where it is not, or is out of range): the bits
+    /// [`Self::eval_domain_lattice_with`] gives them without derivatives
+    /// ([`bspline::eval_lattice_p`] on the same control points), handed over as they are
+    /// summed, with no record per point.
+    pub(crate) fn eval_domain_lattice_p(
+        &self,
+        (face, k): (u32, u32),
+        nu: u32,
+        nv: u32,
+        out: impl FnMut([f64; 3]),
+    ) -> bool {
+        let Some(patch) = self.bspline_root(face as usize, k as usize) else {
+            return false;
+        };
+        bspline::eval_lattice_p(&self.grid(patch), nu, nv, out);
+        true
+    }
+
     /// The B-spline patch that is the whole of the one domain all of `coords` lie in, if
     /// they do and it is one.
     fn one_bspline_domain(&self, coords: &[FaceCoord]) -> Option<&super::Patch> {
@@ -509,13 +529,15 @@ mod tests {
 
     /// Every domain's lattice, at rates that put points on tree splits (even rates) and
     /// off them (odd), equals `eval_d1` point by point bit for bit (signs of zeros included),
-    /// in the same order (and its positions alone, `eval_domain_lattice_with::<false>`, the
-    /// same position bits), on meshes with B-spline, single-crease, Stam and end-cap leaves
+    /// in the same order (and its positions alone, `eval_domain_lattice_with::<false>` and,
+    /// where the domain is one B-spline patch, `eval_domain_lattice_p`, the same position
+    /// bits), on meshes with B-spline, single-crease, Stam and end-cap leaves
     /// under trees.
     #[test]
     fn lattice_is_point_by_point_bit_for_bit() {
         let bits = |p: [[f64; 3]; 3]| p.map(|v| v.map(f64::to_bits));
         let mut kinds = [0usize; 4];
+        let mut roots = 0;
         for table in tables() {
             for f in 0..table.num_faces() {
                 for k in 0..table.sub_faces(f) {
@@ -543,6 +565,19 @@ mod tests {
                         let zero = [0.0f64.to_bits(); 3];
                         let want_p: Vec<_> = want.iter().map(|w| [w[0], zero, zero]).collect();
                         assert_eq!(alone, want_p, "domain ({f}, {k}) at {nu} x {nv}, alone");
+                        // Where the domain is one B-spline patch, its positions handed over
+                        // as summed: the same position bits.
+                        let mut summed = Vec::new();
+                        let root = table.eval_domain_lattice_p((f as u32, k as u32), nu, nv, |p| {
+                            summed.push(p.map(f64::to_bits))
+                        });
+                        let want_p: Vec<_> = want.iter().map(|w| w[0]).collect();
+                        if root {
+                            assert_eq!(summed, want_p, "domain ({f}, {k}) at {nu} x {nv}, summed");
+                            roots += 1;
+                        } else {
+                            assert!(summed.is_empty(), "domain ({f}, {k}): a tree, yet summed");
+                        }
                     }
                     // Which leaves the domain's tree holds (a B-spline root takes the
                     // column path, every other domain the tree path).
@@ -570,6 +605,7 @@ mod tests {
             kinds.iter().all(|&n| n > 0),
             "leaves under trees by kind: {kinds:?}"
         );
+        assert!(roots > 0, "no domain that is one B-spline patch");
     }
 
     /// `eval_d1_points` equals `eval_d1` bit for bit (signs of zeros included), and the
