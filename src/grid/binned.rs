@@ -533,18 +533,23 @@ fn build_below(
     }
 }
 
-/// The binary BVH over `boxes` (at least two, finite), one primitive per leaf, children
-/// after their parents.
-pub(super) fn build(boxes: &[Bounds]) -> Bvh2 {
-    debug_assert!(boxes.len() >= 2);
-    let mut items: Vec<Item> = boxes
+/// The items of `boxes`, each with its index as its id.
+fn items_of(boxes: &[Bounds]) -> Vec<Item> {
+    boxes
         .iter()
         .enumerate()
         .map(|(i, b)| Item {
             lo_id: F4([b[0][0], b[0][1], b[0][2], f32::from_bits(i as u32)]),
             hi: F4([b[1][0], b[1][1], b[1][2], 0.0]),
         })
-        .collect();
+        .collect()
+}
+
+/// The binary BVH over `boxes` (at least two, finite), one primitive per leaf, children
+/// after their parents.
+pub(super) fn build(boxes: &[Bounds]) -> Bvh2 {
+    debug_assert!(boxes.len() >= 2);
+    let mut items = items_of(boxes);
     let whole = Cluster::of(&items, 0);
     // A binary tree of `n` leaves has `2n − 1` nodes: the root, then its descendants.
     let mut nodes = vec![node2(&whole, false, 1); 2 * boxes.len() - 1];
@@ -600,14 +605,7 @@ mod tests {
                     x[1][a] = z;
                 }
             }
-            let items: Vec<Item> = b
-                .iter()
-                .enumerate()
-                .map(|(i, b)| Item {
-                    lo_id: F4([b[0][0], b[0][1], b[0][2], f32::from_bits(i as u32)]),
-                    hi: F4([b[1][0], b[1][1], b[1][2], 0.0]),
-                })
-                .collect();
+            let items = items_of(&b);
             let begin = 7;
             let whole = Cluster::of(&items, begin);
             // The specification, computed plainly.
