@@ -856,6 +856,43 @@ struct Scratch {
     map: Vec<u32>,
 }
 
+/// `f32` slots filled with `f64` positions one after another, each rounded once, the first
+/// out of the numeric range remembered for [`Self::check`] (a point's range is checked as
+/// it comes; its error, which needs the point's parameters, only once all are in).
+struct Rounded<'a> {
+    slots: &'a mut [[f32; 3]],
+    next: usize,
+    outside: Option<(usize, [f64; 3])>,
+}
+
+impl<'a> Rounded<'a> {
+    fn new(slots: &'a mut [[f32; 3]]) -> Self {
+        Rounded {
+            slots,
+            next: 0,
+            outside: None,
+        }
+    }
+
+    /// Stores the next position.
+    #[inline(always)]
+    fn put(&mut self, q: [f64; 3]) {
+        if self.outside.is_none() && !crate::numeric::in_range(q) {
+            self.outside = Some((self.next, q));
+        }
+        self.slots[self.next] = q.map(|x| x as f32);
+        self.next += 1;
+    }
+
+    /// The error of the first position out of range, the `i`-th being at `at(i)` ([`in_range`]).
+    fn check(&self, at: impl FnOnce(usize) -> FaceCoord) -> Result<()> {
+        match self.outside {
+            Some((i, q)) => in_range(at(i), q),
+            None => Ok(()),
+        }
+    }
+}
+
 /// The positions alone of the shared points of `runs` into `out` (one slot a point, in run
 /// order), the bits [`Prepared::eval_shared`]'s general path gives: a run whose points lie in
 /// one domain that is one B-spline patch is summed straight into its slots
@@ -873,26 +910,16 @@ fn positions_alone(
     for run in runs {
         let slots = &mut out[first..first + run.len()];
         first += run.len();
-        let mut i = 0;
-        let mut outside = None;
-        let mut put = |q: [f64; 3]| {
-            if outside.is_none() && !crate::numeric::in_range(q) {
-                outside = Some((i, q));
-            }
-            slots[i] = q.map(|x| x as f32);
-            i += 1;
-        };
+        let mut rounded = Rounded::new(slots);
         let uv = (0..run.len()).map(|i| {
             let c = run.at(i);
             [c.u, c.v]
         });
         if run
             .one_domain()
-            .is_some_and(|d| table.eval_domain_points_p(d, uv, &mut put))
+            .is_some_and(|d| table.eval_domain_points_p(d, uv, |q| rounded.put(q)))
         {
-            if let Some((i, q)) = outside {
-                in_range(run.at(i), q)?;
-            }
+            rounded.check(|i| run.at(i))?;
             continue;
         }
         coords.clear();
@@ -996,21 +1023,16 @@ impl DomainCtx<'_> {
         let e = topo.face_edge(f, m) as usize;
         let va = topo.face_vertices(f)[m] as usize;
         let vb = topo.face_vertices(f)[(m + 1) % n] as usize;
-        let r = self.rates.edge[e];
-        let forward = topo.edge_verts[e][0] as usize == va;
-        let first = self.shared.edge_first[e];
         pts.clear();
         pts.push(SidePoint {
             index: self.shared.vertex[va],
             seam: self.sharp_vertex[va],
         });
-        for i in 1..r {
-            let j = if forward { i - 1 } else { r - 1 - i };
-            pts.push(SidePoint {
-                index: first + j,
-                seam: self.sharp_edge[e],
-            });
-        }
+        let seam = self.sharp_edge[e];
+        pts.extend(
+            self.edge_inner(e, va)
+                .map(|index| SidePoint { index, seam }),
+        );
         pts.push(SidePoint {
             index: self.shared.vertex[vb],
             seam: self.sharp_vertex[vb],
@@ -1024,14 +1046,24 @@ impl DomainCtx<'_> {
         let topo = &self.level.topo;
         let e = topo.face_edge(f, m) as usize;
         let va = topo.face_vertices(f)[m] as usize;
+        out.push(self.shared.vertex[va]);
+        out.extend(self.edge_inner(e, va));
+    }
+
+    /// The shared indices of the `r − 1` inner points of edge `e` (rate `r`), in order from
+    /// its end `va`.
+    #[inline(always)]
+    fn edge_inner(&self, e: usize, va: usize) -> impl Iterator<Item = u32> {
         let r = self.rates.edge[e];
         let first = self.shared.edge_first[e];
-        out.push(self.shared.vertex[va]);
-        if topo.edge_verts[e][0] as usize == va {
-            out.extend(first..first + (r - 1));
-        } else {
-            out.extend((first..first + (r - 1)).rev());
-        }
+        let forward = self.level.topo.edge_verts[e][0] as usize == va;
+        (0..r - 1).map(move |j| {
+            if forward {
+                first + j
+            } else {
+                first + r - 2 - j
+            }
+        })
     }
 
     /// Spoke `k` of n-gon `f`: from the midpoint of edge `k` to the centre, into `pts`
@@ -1117,24 +1149,18 @@ impl DomainCtx<'_> {
         let nu = pat.rates[0].max(pat.rates[2]);
         let nv = pat.rates[1].max(pat.rates[3]);
         debug_assert_eq!(slots.len(), ((nu - 1) * (nv - 1)) as usize);
-        let (mut i, mut outside) = (0, None);
-        let put = |q: [f64; 3]| {
-            if outside.is_none() && !crate::numeric::in_range(q) {
-                outside = Some((i, q));
-            }
-            slots[i] = q.map(|x| x as f32);
-            i += 1;
-        };
+        let mut rounded = Rounded::new(slots);
+        let (f32_, k32) = (f as u32, k as u32);
         if !self
             .table
-            .eval_domain_lattice_p((f as u32, k as u32), nu, nv, put)
+            .eval_domain_lattice_p((f32_, k32), nu, nv, |q| rounded.put(q))
         {
             return Ok(false);
         }
-        if let Some((i, q)) = outside {
+        rounded.check(|i| {
             let [u, v] = pat.interior[i];
-            in_range(FaceCoord::new(f as u32, k as u32, u, v), q)?;
-        }
+            FaceCoord::new(f32_, k32, u, v)
+        })?;
         Ok(true)
     }
 

@@ -47,11 +47,11 @@ impl PatchTable {
         if !self.exact_domain(face, k) {
             return false;
         }
+        let root = (face as u32, k as u32);
+        if !D1 && self.eval_domain_lattice_p(root, nu, nv, |p| out(alone(p))) {
+            return true;
+        }
         if let Some(patch) = self.bspline_root(face, k) {
-            if !D1 {
-                bspline::eval_lattice_p(&self.grid(patch), nu, nv, |p| out(alone(p)));
-                return true;
-            }
             bspline::eval_lattice(&self.grid(patch), nu, nv, |pt| {
                 // The root's frame, as `eval` applies it (the identity up to the sign of zeros).
                 out(Frame::UNIT.face_point_d1(pt))
